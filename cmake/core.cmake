@@ -1,0 +1,15 @@
+# Estimation core: no ROS include, its own library, tested without a master.
+add_library(${PROJECT_NAME}_core
+  src/core/compensator.cpp
+  src/core/frequency_tracker.cpp
+  src/core/calibration_file.cpp)
+target_include_directories(${PROJECT_NAME}_core PUBLIC include)
+target_link_libraries(${PROJECT_NAME}_core PUBLIC Eigen3::Eigen PkgConfig::FFTW3 yaml-cpp)
+
+if(CATKIN_ENABLE_TESTING)
+  catkin_add_gtest(test_core
+    test/core/test_frequency_tracker.cpp
+    test/core/test_compensator.cpp
+    test/core/test_bad_input.cpp)
+  target_link_libraries(test_core ${PROJECT_NAME}_core)
+endif()

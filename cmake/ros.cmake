@@ -1,0 +1,1 @@
+# ROS wrapper, nodelet, node, offline bag tools and rostests.

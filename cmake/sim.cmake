@@ -1,0 +1,1 @@
+# Ship IMU simulator (core library without ROS; see docs/simulator.md).

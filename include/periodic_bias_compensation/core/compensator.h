@@ -1,0 +1,182 @@
+// Constant and periodic accelerometer bias compensation (estimation core, no ROS).
+//
+// One Compensator takes IMU samples one at a time (time as a plain double, specific force in
+// the sensor frame, optional orientation) and returns, for every accepted sample, the
+// drift-compensated slow motion and the drift-free wave motion in a level ENU frame.
+//
+// Threading: a Compensator is not thread-safe; the owner serialises calls.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include <Eigen/Geometry>
+
+#include "periodic_bias_compensation/core/frequency_tracker.h"
+
+namespace periodic_bias_compensation
+{
+using Vector3 = Eigen::Vector3d;
+using Quaternion = Eigen::Quaterniond;
+
+/// Standard gravity [m/s^2] (REP-103: ENU, z up; a sensor at rest reads +g on its up axis).
+constexpr double kStandardGravity = 9.80665;
+
+/// How the periodic drift terms d_v, d_p are computed.
+enum class Mode
+{
+  kPaper,    ///< Eq. 1-7 of Kim et al. as written, open points decided in docs/algorithm.md
+  kDefault,  ///< the project's estimator (harmonic tracking + comb drift removal)
+};
+
+/// "paper" / "default" <-> Mode. modeFromString returns false on an unknown name.
+std::string toString(Mode mode);
+bool modeFromString(const std::string& name, Mode* mode);
+
+/// Gains of Eq. 6-7 for one axis (paper Table 3 gives the defaults).
+struct AxisGains
+{
+  double alpha_v = 0.5;  ///< velocity error gain [-], 0 < alpha_v < 1 (or 2: see validate)
+  double alpha_p = 0.5;  ///< position error gain [-]
+  double beta_v = 6.0;   ///< periodic offset gain, velocity [-]
+  double beta_p = 2.0;   ///< periodic offset gain, position [-]
+};
+
+/// Everything that configures a Compensator. Defaults are those documented in
+/// config/compensator.yaml.
+struct CompensatorConfig
+{
+  Mode mode = Mode::kDefault;
+  /// Table 3 of the paper: x, y, z.
+  std::array<AxisGains, 3> gains{ { { 0.5, 0.5, 6.0, 2.0 }, { 0.5, 0.1, 5.0, 1.0 }, { 0.5, 0.1, 5.0, 4.0 } } };
+
+  bool enable_constant = true;   ///< estimate/remove the constant bias
+  bool enable_periodic = true;   ///< estimate/remove the periodic bias
+  double calibration_duration = 10.0;  ///< constant-bias window at start [s]
+  bool assume_static_calibration = false;  ///< window is at rest (paper Sec. 3.1); else motion allowed
+
+  double fft_window = 30.0;      ///< FFT window length [s]
+  double fft_hop = 1.0;          ///< time between FFT updates [s]
+  double min_frequency = 0.05;   ///< lowest dominant frequency searched [Hz]
+  double max_frequency = 2.0;    ///< highest dominant frequency searched [Hz]
+  double min_peak_ratio = 8.0;   ///< peak power / median power in band needed for a lock [-]
+  int harmonics = 2;             ///< harmonics of the dominant frequency tracked (default mode)
+  double harmonic_memory = 10.0; ///< time constant of the harmonic estimator [s] (default mode)
+  double drift_time_constant = 20.0;  ///< slow-motion drift removal time constant [s] (default)
+
+  double gravity = kStandardGravity;  ///< local gravity magnitude [m/s^2]
+  double max_gap = 0.5;          ///< a gap longer than this resets the integration [s]
+  double max_rate_change = 0.2;  ///< relative sample-rate change that re-plans the FFT [-]
+  double max_quaternion_norm_error = 0.01;  ///< |1 - |q|| above this rejects the sample [-]
+
+  /// Checks ranges and loop stability. On failure returns false and, if why != nullptr,
+  /// writes a message naming the offending key.
+  bool validate(std::string* why) const;
+};
+
+/// One IMU sample. REP-145: specific force including gravity, in the sensor frame.
+struct ImuSample
+{
+  double t = 0.0;               ///< sample time [s]
+  Vector3 specific_force{ 0, 0, 0 };  ///< accelerometer [m/s^2]
+  Vector3 angular_rate{ 0, 0, 0 };    ///< gyro [rad/s]
+  bool has_orientation = false;
+  Quaternion orientation{ 1, 0, 0, 0 };  ///< sensor -> level ENU frame
+};
+
+/// Per-axis estimator state, as published in BiasState.
+struct AxisState
+{
+  double constant_bias = 0.0;     ///< [m/s^2]
+  double periodic_bias = 0.0;     ///< current periodic acceleration estimate [m/s^2]
+  double frequency = 0.0;         ///< dominant frequency [Hz], 0 if not locked
+  double period_samples = 0.0;    ///< L [samples], 0 if not locked
+  bool locked = false;
+  double d_v = 0.0;               ///< [m/s]
+  double d_p = 0.0;               ///< [m]
+};
+
+/// What happened to a sample handed to addSample().
+enum class SampleStatus
+{
+  kAccepted,
+  kRejectedNonFinite,      ///< NaN/Inf in a used field: dropped
+  kRejectedBadQuaternion,  ///< zero or non-unit orientation: dropped
+  kRejectedDuplicate,      ///< same stamp as the previous sample: dropped
+  kResetBackwards,         ///< stamp went backwards (bag loop): state reset, sample starts anew
+  kGapReset,               ///< gap longer than max_gap: integration reset, sample starts anew
+};
+std::string toString(SampleStatus status);
+
+/// Output for one accepted sample, level ENU frame.
+struct CompensatorOutput
+{
+  double t = 0.0;
+  Vector3 position_filtered{ 0, 0, 0 };  ///< slow motion, drift and wave removed [m]
+  Vector3 velocity_filtered{ 0, 0, 0 };  ///< [m/s]
+  Vector3 position_wave{ 0, 0, 0 };      ///< wave (periodic) motion about the slow motion [m]
+  Vector3 velocity_wave{ 0, 0, 0 };      ///< [m/s]
+  Vector3 acceleration_level{ 0, 0, 0 }; ///< gravity-free level acceleration, bias removed [m/s^2]
+  Quaternion orientation{ 1, 0, 0, 0 };  ///< sensor -> level frame used for this sample
+  Vector3 position_variance{ 0, 0, 0 };  ///< per-axis variance of position_filtered [m^2]
+  Vector3 velocity_variance{ 0, 0, 0 };  ///< [m^2/s^2]
+  Vector3 wave_position_variance{ 0, 0, 0 };  ///< [m^2]
+  std::array<AxisState, 3> axes;
+  bool calibrated = false;
+};
+
+/// Running counters for diagnostics.
+struct CompensatorCounters
+{
+  std::uint64_t accepted = 0;
+  std::uint64_t rejected_non_finite = 0;
+  std::uint64_t rejected_bad_quaternion = 0;
+  std::uint64_t rejected_duplicate = 0;
+  std::uint64_t resets_backwards = 0;
+  std::uint64_t gap_resets = 0;
+  std::uint64_t rate_changes = 0;
+  double sample_rate = 0.0;  ///< current estimate [Hz]
+};
+
+class CompensatorImpl;
+
+class Compensator
+{
+public:
+  /// @throws std::invalid_argument if the config does not validate.
+  explicit Compensator(const CompensatorConfig& config = CompensatorConfig());
+  ~Compensator();
+  Compensator(const Compensator&) = delete;
+  Compensator& operator=(const Compensator&) = delete;
+
+  /// Replaces the configuration at run time. Invalid configs are refused (false, message in
+  /// *why) and the running estimate is untouched. Gains take effect on the next sample;
+  /// changes of the FFT window, band or mode restart the period search but keep the bias.
+  bool setConfig(const CompensatorConfig& config, std::string* why);
+  const CompensatorConfig& config() const;
+
+  /// Processes one sample. Fills *out (if not null) only when the status is kAccepted,
+  /// kResetBackwards or kGapReset.
+  SampleStatus addSample(const ImuSample& sample, CompensatorOutput* out);
+
+  /// Forgets everything, including the constant bias unless it came from a file.
+  void reset();
+  /// Starts a new constant-bias calibration window at the next sample.
+  void recalibrate();
+  /// Sets the constant bias [m/s^2] (level frame) and marks the compensator calibrated.
+  /// Returns false (and changes nothing) for a non-finite value.
+  bool setConstantBias(const Vector3& bias);
+  bool calibrated() const;
+  Vector3 constantBias() const;
+  /// Orientation sensor -> level used when samples carry none (from the calibration window).
+  Quaternion levelOrientation() const;
+
+  const CompensatorCounters& counters() const;
+
+private:
+  std::unique_ptr<CompensatorImpl> impl_;
+};
+
+}  // namespace periodic_bias_compensation
