@@ -1,1 +1,24 @@
 # Ship IMU simulator (core library without ROS; see docs/simulator.md).
+add_library(${PROJECT_NAME}_sim
+  src/sim/random.cpp
+  src/sim/scenario.cpp
+  src/sim/effects.cpp
+  src/sim/motion.cpp
+  src/sim/simulator.cpp)
+target_include_directories(${PROJECT_NAME}_sim PUBLIC include)
+target_link_libraries(${PROJECT_NAME}_sim PUBLIC Eigen3::Eigen yaml-cpp)
+
+# Command-line front end: scenario -> bag (and CSV), no ROS master needed.
+add_executable(simulate_imu src/tools/simulate_imu.cpp)
+target_include_directories(simulate_imu PRIVATE ${catkin_INCLUDE_DIRS})
+target_link_libraries(simulate_imu ${PROJECT_NAME}_sim ${catkin_LIBRARIES})
+
+if(CATKIN_ENABLE_TESTING)
+  catkin_add_gtest(test_sim
+    test/sim/main.cpp
+    test/sim/test_scenario.cpp
+    test/sim/test_determinism.cpp)
+  target_link_libraries(test_sim ${PROJECT_NAME}_sim)
+  target_compile_definitions(test_sim PRIVATE
+    PBC_SCENARIO_DIR="${CMAKE_CURRENT_SOURCE_DIR}/config/scenarios")
+endif()

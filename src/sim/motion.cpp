@@ -1,0 +1,357 @@
+#include "periodic_bias_compensation/sim/motion.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "periodic_bias_compensation/sim/random.h"
+
+namespace periodic_bias_compensation::sim
+{
+namespace
+{
+constexpr double kTwoPi = 2.0 * M_PI;
+constexpr std::int64_t kBlock = 256;  // samples per cached sea block
+
+double wrapAngle(double a)
+{
+  return std::remainder(a, kTwoPi);
+}
+
+// Value and first two derivatives with respect to mu of a DOF's directional gain.
+struct Gain
+{
+  double g0;
+  double g1;
+  double g2;
+  bool cosine;  // the DOF follows cos(theta) (heave) instead of sin(theta)
+};
+
+std::array<Gain, 6> gains(const std::array<double, 6>& r, double k, double mu)
+{
+  const double c = std::cos(mu);
+  const double s = std::sin(mu);
+  const double c2 = std::cos(2.0 * mu);
+  const double s2 = std::sin(2.0 * mu);
+  return { { { r[kSurge] * c, -r[kSurge] * s, -r[kSurge] * c, false },
+             { r[kSway] * s, r[kSway] * c, -r[kSway] * s, false },
+             { r[kHeave], 0.0, 0.0, true },
+             { r[kRoll] * k * s, r[kRoll] * k * c, -r[kRoll] * k * s, false },
+             { -r[kPitch] * k * c, r[kPitch] * k * s, r[kPitch] * k * c, false },
+             { r[kYaw] * k * 0.5 * s2, r[kYaw] * k * c2, -2.0 * r[kYaw] * k * s2, false } } };
+}
+}  // namespace
+
+SlowMotion::SlowMotion(const Motion& motion)
+{
+  const double inf = std::numeric_limits<double>::infinity();
+  const double speed0 = motion.type == MotionType::kStatic ? 0.0 : motion.speed;
+  Segment current{ 0.0, inf, motion.position, motion.heading, speed0, 0.0, 0.0 };
+  if (motion.type != MotionType::kRoute || motion.route.legs.empty())
+  {
+    segments_.push_back(current);
+    return;
+  }
+  double t = 0.0;
+  auto add = [&](double duration, double turn_rate, double acceleration) {
+    const Segment s{ t, t + duration, current.position, current.heading, current.speed, turn_rate, acceleration };
+    segments_.push_back(s);
+    const SlowState end = at(t + duration);
+    current.position = end.position;
+    current.heading = end.heading;
+    current.speed += acceleration * duration;
+    t += duration;
+  };
+  for (const RouteLeg& leg : motion.route.legs)
+  {
+    const double turn = wrapAngle(leg.heading - current.heading);
+    if (turn != 0.0)
+    {
+      add(std::abs(turn) / motion.route.turn_rate, std::copysign(motion.route.turn_rate, turn), 0.0);
+    }
+    current.heading = wrapAngle(leg.heading);
+    const double dv = leg.speed - current.speed;
+    if (dv != 0.0)
+    {
+      add(std::abs(dv) / motion.route.acceleration, 0.0, std::copysign(motion.route.acceleration, dv));
+    }
+    current.speed = leg.speed;
+    add(leg.duration, 0.0, 0.0);
+  }
+  segments_.back().end = inf;
+}
+
+std::size_t SlowMotion::segmentAt(double elapsed) const
+{
+  const auto it = std::upper_bound(segments_.begin(), segments_.end(), elapsed,
+                                   [](double t, const Segment& s) { return t < s.start; });
+  return it == segments_.begin() ? 0 : static_cast<std::size_t>(it - segments_.begin()) - 1;
+}
+
+double SlowMotion::segmentEnd(std::size_t segment) const
+{
+  return segments_[segment].end;
+}
+
+bool SlowMotion::segmentSteady(std::size_t segment) const
+{
+  return segments_[segment].turn_rate == 0.0 && segments_[segment].acceleration == 0.0;
+}
+
+SlowState SlowMotion::at(double elapsed) const
+{
+  const Segment& s = segments_[segmentAt(elapsed)];
+  const double tau = elapsed - s.start;
+  SlowState out;
+  if (s.turn_rate != 0.0)
+  {
+    const double psi = s.heading + s.turn_rate * tau;
+    const double v = s.speed;
+    const double r = s.turn_rate;
+    out.heading = wrapAngle(psi);
+    out.yaw_rate = r;
+    out.position = s.position + (v / r) * Vector3(std::sin(psi) - std::sin(s.heading),
+                                                   std::cos(s.heading) - std::cos(psi), 0.0);
+    out.velocity = v * Vector3(std::cos(psi), std::sin(psi), 0.0);
+    out.acceleration = v * r * Vector3(-std::sin(psi), std::cos(psi), 0.0);
+    return out;
+  }
+  const Vector3 h(std::cos(s.heading), std::sin(s.heading), 0.0);
+  out.heading = wrapAngle(s.heading);
+  out.position = s.position + (s.speed * tau + 0.5 * s.acceleration * tau * tau) * h;
+  out.velocity = (s.speed + s.acceleration * tau) * h;
+  out.acceleration = s.acceleration * h;
+  return out;
+}
+
+double jonswap(double omega, double hs, double tp, double gamma)
+{
+  if (omega <= 0.0)
+  {
+    return 0.0;
+  }
+  const double wp = kTwoPi / tp;
+  const double sigma = omega <= wp ? 0.07 : 0.09;
+  const double x = (omega - wp) / (sigma * wp);
+  const double a_gamma = 1.0 - 0.287 * std::log(gamma);
+  const double r = wp / omega;
+  return a_gamma * 5.0 / 16.0 * hs * hs * std::pow(wp, 4) * std::pow(omega, -5) * std::exp(-1.25 * std::pow(r, 4)) *
+         std::pow(gamma, std::exp(-0.5 * x * x));
+}
+
+std::vector<WaveComponent> drawWaveComponents(const Sea& sea, double gravity, std::uint64_t seed)
+{
+  Rng rng(seed);
+  std::vector<WaveComponent> out;
+  for (const WaveSystem& w : sea.systems)
+  {
+    const double gamma = w.spectrum == "pierson_moskowitz" ? 1.0 : w.gamma;
+    const double wp = kTwoPi / w.peak_period;
+    const double lo = 0.6 * wp;
+    const double bin = (4.0 * wp - lo) / sea.components;
+    for (int i = 0; i < sea.components; ++i)
+    {
+      WaveComponent c;
+      c.omega = lo + (i + rng.uniform()) * bin;
+      c.amplitude = std::sqrt(2.0 * jonswap(c.omega, w.significant_height, w.peak_period, gamma) * bin);
+      c.wavenumber = c.omega * c.omega / gravity;
+      c.direction = w.direction + w.spreading * rng.normal();
+      c.phase = rng.uniform(0.0, kTwoPi);
+      out.push_back(c);
+    }
+  }
+  return out;
+}
+
+double encounterFrequency(double omega, double speed, double mu, double gravity)
+{
+  return omega - omega * omega * speed * std::cos(mu) / gravity;
+}
+
+ShipMotion::ShipMotion(const Scenario& scenario, std::uint64_t seed)
+  : motion_(scenario.motion), dt_(1.0 / scenario.rate), gravity_(scenario.gravity), slow_(scenario.motion)
+{
+  const bool has_sea = motion_.type == MotionType::kSea || motion_.type == MotionType::kRoute;
+  if (has_sea)
+  {
+    components_ = drawWaveComponents(motion_.sea, gravity_, deriveSeed(seed, "sea", 0));
+  }
+}
+
+ShipMotion::Dofs ShipMotion::sinusoidDofs(double elapsed) const
+{
+  Dofs d{};
+  for (int j = 0; j < 6; ++j)
+  {
+    const Sinusoid& s = motion_.sinusoids[j];
+    const double w = kTwoPi * s.frequency;
+    const double a = w * elapsed + s.phase;
+    const double sa = std::sin(a);
+    d[3 * j] = s.amplitude * sa;
+    d[3 * j + 1] = s.amplitude * w * std::cos(a);
+    d[3 * j + 2] = -s.amplitude * w * w * sa;
+  }
+  return d;
+}
+
+ShipMotion::Dofs ShipMotion::seaDofsDirect(double elapsed, const SlowState& slow) const
+{
+  Dofs d{};
+  const Vector3 rel = slow.position - motion_.position;
+  const double mu_dot = -slow.yaw_rate;
+  for (const WaveComponent& c : components_)
+  {
+    const Vector3 dir(std::cos(c.direction), std::sin(c.direction), 0.0);
+    const double th = c.omega * elapsed - c.wavenumber * dir.dot(rel) + c.phase;
+    const double th_dot = c.omega - c.wavenumber * dir.dot(slow.velocity);
+    const double th_ddot = -c.wavenumber * dir.dot(slow.acceleration);
+    const double s = std::sin(th);
+    const double co = std::cos(th);
+    const std::array<Gain, 6> g = gains(motion_.sea.response, c.wavenumber, c.direction - slow.heading);
+    for (int j = 0; j < 6; ++j)
+    {
+      const double f0 = g[j].cosine ? co : s;
+      const double f1 = g[j].cosine ? -s : co;
+      const double f2 = -f0;
+      d[3 * j] += c.amplitude * g[j].g0 * f0;
+      d[3 * j + 1] += c.amplitude * (g[j].g1 * mu_dot * f0 + g[j].g0 * f1 * th_dot);
+      d[3 * j + 2] += c.amplitude * (g[j].g2 * mu_dot * mu_dot * f0 + 2.0 * g[j].g1 * mu_dot * f1 * th_dot +
+                                     g[j].g0 * (f2 * th_dot * th_dot + f1 * th_ddot));
+    }
+  }
+  return d;
+}
+
+void ShipMotion::fillSeaBlock(std::int64_t k0)
+{
+  const double t0 = k0 * dt_;
+  const std::size_t seg = slow_.segmentAt(t0);
+  const double end = slow_.segmentEnd(seg);
+  std::int64_t n = 1;
+  while (n < kBlock && (k0 + n) * dt_ < end)
+  {
+    ++n;
+  }
+  block_.resize(18, n);
+  block_start_ = k0;
+  if (!slow_.segmentSteady(seg))
+  {
+    for (std::int64_t j = 0; j < n; ++j)
+    {
+      const double t = (k0 + j) * dt_;
+      const Dofs d = seaDofsDirect(t, slow_.at(t));
+      block_.col(j) = Eigen::Map<const Eigen::Matrix<double, 18, 1>>(d.data());
+    }
+    return;
+  }
+  // Constant velocity and heading: the phases advance linearly, so rotate phasors and get
+  // all DOFs with two matrix products (rows that follow sin(theta) and rows that follow cos).
+  const SlowState slow = slow_.at(t0);
+  const Vector3 rel = slow.position - motion_.position;
+  const Eigen::Index m = static_cast<Eigen::Index>(components_.size());
+  Eigen::ArrayXd zc(m), zs(m), ec(m), es(m);
+  Eigen::MatrixXd msin = Eigen::MatrixXd::Zero(11, m);
+  Eigen::MatrixXd mcos = Eigen::MatrixXd::Zero(7, m);
+  for (Eigen::Index i = 0; i < m; ++i)
+  {
+    const WaveComponent& c = components_[i];
+    const Vector3 dir(std::cos(c.direction), std::sin(c.direction), 0.0);
+    const double th = c.omega * t0 - c.wavenumber * dir.dot(rel) + c.phase;
+    const double we = c.omega - c.wavenumber * dir.dot(slow.velocity);
+    zc[i] = std::cos(th);
+    zs[i] = std::sin(th);
+    ec[i] = std::cos(we * dt_);
+    es[i] = std::sin(we * dt_);
+    const std::array<Gain, 6> g = gains(motion_.sea.response, c.wavenumber, c.direction - slow.heading);
+    int rs = 0;
+    int rc = 0;
+    for (int j = 0; j < 6; ++j)
+    {
+      const double a = c.amplitude * g[j].g0;
+      if (g[j].cosine)
+      {
+        mcos(rc++, i) = a;
+        msin(rs++, i) = -a * we;
+        mcos(rc++, i) = -a * we * we;
+      }
+      else
+      {
+        msin(rs++, i) = a;
+        mcos(rc++, i) = a * we;
+        msin(rs++, i) = -a * we * we;
+      }
+    }
+  }
+  Eigen::MatrixXd s(m, n), c(m, n);
+  for (std::int64_t j = 0; j < n; ++j)
+  {
+    s.col(j) = zs.matrix();
+    c.col(j) = zc.matrix();
+    const Eigen::ArrayXd next_c = zc * ec - zs * es;
+    zs = zs * ec + zc * es;
+    zc = next_c;
+  }
+  const Eigen::MatrixXd ps = msin * s;
+  const Eigen::MatrixXd pc = mcos * c;
+  int rs = 0;
+  int rc = 0;
+  for (int j = 0; j < 6; ++j)
+  {
+    const bool cosine = j == kHeave;
+    block_.row(3 * j) = cosine ? pc.row(rc++) : ps.row(rs++);
+    block_.row(3 * j + 1) = cosine ? ps.row(rs++) : pc.row(rc++);
+    block_.row(3 * j + 2) = cosine ? pc.row(rc++) : ps.row(rs++);
+  }
+}
+
+Truth ShipMotion::evaluate(std::int64_t k)
+{
+  const double t = k * dt_;
+  const SlowState slow = slow_.at(t);
+  Dofs d{};
+  if (motion_.type == MotionType::kSinusoids)
+  {
+    d = sinusoidDofs(t);
+  }
+  else if (!components_.empty())
+  {
+    if (block_start_ < 0 || k < block_start_ || k >= block_start_ + block_.cols())
+    {
+      fillSeaBlock(k);
+    }
+    Eigen::Map<Eigen::Matrix<double, 18, 1>>(d.data()) = block_.col(k - block_start_);
+  }
+
+  Truth out;
+  const double r = slow.yaw_rate;
+  const Eigen::AngleAxisd rz(slow.heading, Vector3::UnitZ());
+  const auto perp = [](const Vector3& x) { return Vector3(-x.y(), x.x(), 0.0); };
+  const Vector3 q(d[0], d[3], d[6]);
+  const Vector3 dq(d[1], d[4], d[7]);
+  const Vector3 ddq(d[2], d[5], d[8]);
+  out.slow_position = slow.position;
+  out.slow_velocity = slow.velocity;
+  out.slow_acceleration = slow.acceleration;
+  out.slow_heading = slow.heading;
+  out.slow_yaw_rate = r;
+  out.wave_position = rz * q;
+  out.wave_velocity = rz * (dq + r * perp(q));
+  out.wave_acceleration = rz * (ddq + 2.0 * r * perp(dq) + r * r * perp(perp(q)));
+  out.position = out.slow_position + out.wave_position;
+  out.velocity = out.slow_velocity + out.wave_velocity;
+  out.acceleration = out.slow_acceleration + out.wave_acceleration;
+
+  const double phi = motion_.roll + d[9], phi_d = d[10], phi_dd = d[11];
+  const double th = motion_.pitch + d[12], th_d = d[13], th_dd = d[14];
+  const double psi = slow.heading + d[15], psi_d = r + d[16], psi_dd = d[17];
+  out.attitude = Eigen::AngleAxisd(psi, Vector3::UnitZ()) * Eigen::AngleAxisd(th, Vector3::UnitY()) *
+                 Eigen::AngleAxisd(phi, Vector3::UnitX());
+  const double sp = std::sin(phi), cp = std::cos(phi), st = std::sin(th), ct = std::cos(th);
+  out.angular_rate = Vector3(phi_d - psi_d * st, th_d * cp + psi_d * ct * sp, -th_d * sp + psi_d * ct * cp);
+  out.angular_acceleration =
+      Vector3(phi_dd - psi_dd * st - psi_d * ct * th_d,
+              th_dd * cp - th_d * sp * phi_d + psi_dd * ct * sp - psi_d * st * th_d * sp + psi_d * ct * cp * phi_d,
+              -th_dd * sp - th_d * cp * phi_d + psi_dd * ct * cp - psi_d * st * th_d * cp - psi_d * ct * sp * phi_d);
+  return out;
+}
+}  // namespace periodic_bias_compensation::sim
