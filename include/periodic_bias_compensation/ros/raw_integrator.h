@@ -1,0 +1,31 @@
+// Plain double integration of the gravity-free level acceleration (constant bias removed,
+// nothing else): the "raw" track shown next to the compensated one in rviz.
+#pragma once
+
+#include "periodic_bias_compensation/core/compensator.h"
+
+namespace periodic_bias_compensation
+{
+/// Trapezoidal double integration of acceleration samples.
+class RawIntegrator
+{
+public:
+  /// Adds one sample. The first sample after reset() only sets the start; a sample after a gap
+  /// (restart = true) keeps position and velocity and does not integrate across the gap.
+  /// @param t sample time [s]
+  /// @param acceleration gravity-free level acceleration [m/s^2]
+  void add(double t, const Vector3& acceleration, bool restart);
+  /// Back to zero position and velocity (stamps went backwards).
+  void reset();
+  const Vector3& position() const { return position_; }  ///< [m]
+  const Vector3& velocity() const { return velocity_; }  ///< [m/s]
+
+private:
+  bool started_ = false;
+  double t_ = 0.0;
+  Vector3 acceleration_{ 0, 0, 0 };
+  Vector3 velocity_{ 0, 0, 0 };
+  Vector3 position_{ 0, 0, 0 };
+};
+
+}  // namespace periodic_bias_compensation

@@ -1,0 +1,575 @@
+#include "periodic_bias_compensation/ros/compensator_ros.h"
+
+#include <algorithm>
+#include <cinttypes>
+#include <cmath>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+#include <vector>
+
+#include <geometry_msgs/TransformStamped.h>
+#include <nav_msgs/Path.h>
+#include <tf2/exceptions.h>
+
+#include "periodic_bias_compensation/core/calibration_file.h"
+
+namespace periodic_bias_compensation
+{
+namespace
+{
+constexpr double kWarnPeriod = 5.0;  ///< throttle of hot-path warnings [s]
+const char* const kAxisNames[3] = { "x", "y", "z" };
+
+/// Copies the run-time tunable fields of a reconfigure request into a core config.
+/// False with a message for an unknown mode name.
+bool applyTuning(const TuningConfig& tuning, CompensatorConfig* config, std::string* why)
+{
+  if (!modeFromString(tuning.mode, &config->mode))
+  {
+    *why = "unknown mode '" + tuning.mode + "'";
+    return false;
+  }
+  config->enable_constant = tuning.enable_constant;
+  config->enable_periodic = tuning.enable_periodic;
+  config->gains[0] = { tuning.alpha_v_x, tuning.alpha_p_x, tuning.beta_v_x, tuning.beta_p_x };
+  config->gains[1] = { tuning.alpha_v_y, tuning.alpha_p_y, tuning.beta_v_y, tuning.beta_p_y };
+  config->gains[2] = { tuning.alpha_v_z, tuning.alpha_p_z, tuning.beta_v_z, tuning.beta_p_z };
+  config->fft_window = tuning.fft_window;
+  config->fft_hop = tuning.fft_hop;
+  config->min_frequency = tuning.min_frequency;
+  config->max_frequency = tuning.max_frequency;
+  config->min_peak_ratio = tuning.min_peak_ratio;
+  config->harmonics = tuning.harmonics;
+  config->harmonic_memory = tuning.harmonic_memory;
+  config->drift_time_constant = tuning.drift_time_constant;
+  config->max_gap = tuning.max_gap;
+  return true;
+}
+
+/// The inverse of applyTuning: what the reconfigure server should show for a core config.
+void toTuning(const CompensatorConfig& config, TuningConfig* tuning)
+{
+  tuning->mode = toString(config.mode);
+  tuning->enable_constant = config.enable_constant;
+  tuning->enable_periodic = config.enable_periodic;
+  tuning->alpha_v_x = config.gains[0].alpha_v;
+  tuning->alpha_p_x = config.gains[0].alpha_p;
+  tuning->beta_v_x = config.gains[0].beta_v;
+  tuning->beta_p_x = config.gains[0].beta_p;
+  tuning->alpha_v_y = config.gains[1].alpha_v;
+  tuning->alpha_p_y = config.gains[1].alpha_p;
+  tuning->beta_v_y = config.gains[1].beta_v;
+  tuning->beta_p_y = config.gains[1].beta_p;
+  tuning->alpha_v_z = config.gains[2].alpha_v;
+  tuning->alpha_p_z = config.gains[2].alpha_p;
+  tuning->beta_v_z = config.gains[2].beta_v;
+  tuning->beta_p_z = config.gains[2].beta_p;
+  tuning->fft_window = config.fft_window;
+  tuning->fft_hop = config.fft_hop;
+  tuning->min_frequency = config.min_frequency;
+  tuning->max_frequency = config.max_frequency;
+  tuning->min_peak_ratio = config.min_peak_ratio;
+  tuning->harmonics = config.harmonics;
+  tuning->harmonic_memory = config.harmonic_memory;
+  tuning->drift_time_constant = config.drift_time_constant;
+  tuning->max_gap = config.max_gap;
+}
+
+bool fileExists(const std::string& path)
+{
+  return std::ifstream(path).good();
+}
+
+geometry_msgs::PoseStamped poseStamped(const std::string& frame, const ros::Time& stamp, const Vector3& position,
+                                       const Quaternion& orientation)
+{
+  geometry_msgs::PoseStamped pose;
+  pose.header.frame_id = frame;
+  pose.header.stamp = stamp;
+  pose.pose.position.x = position.x();
+  pose.pose.position.y = position.y();
+  pose.pose.position.z = position.z();
+  pose.pose.orientation.w = orientation.w();
+  pose.pose.orientation.x = orientation.x();
+  pose.pose.orientation.y = orientation.y();
+  pose.pose.orientation.z = orientation.z();
+  return pose;
+}
+
+nav_msgs::Path toPath(const std::deque<geometry_msgs::PoseStamped>& poses, const std::string& frame,
+                      const ros::Time& stamp)
+{
+  nav_msgs::Path path;
+  path.header.frame_id = frame;
+  path.header.stamp = stamp;
+  path.poses.assign(poses.begin(), poses.end());
+  return path;
+}
+}  // namespace
+
+CompensatorRos::CompensatorRos(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh), pnh_(pnh)
+{
+  std::string why;
+  if (!readParameters(RosParameterSource(pnh_), &params_, &why))
+  {
+    throw std::runtime_error(why);
+  }
+  compensator_ = std::make_unique<Compensator>(params_.core);
+  calibration_source_ = "calibration window";
+  const std::string& calibration_file = params_.ros.calibration_file;
+  if (!calibration_file.empty())
+  {
+    if (fileExists(calibration_file))
+    {
+      Vector3 bias;
+      if (!loadCalibration(calibration_file, &bias, &why))
+      {
+        throw std::runtime_error("parameter 'calibration_file': " + why);
+      }
+      if (!compensator_->setConstantBias(bias))
+      {
+        throw std::runtime_error("parameter 'calibration_file': '" + calibration_file +
+                                 "' holds a non-finite constant bias");
+      }
+      calibration_source_ = "file " + calibration_file;
+      ROS_INFO("constant bias [%.5f %.5f %.5f] m/s^2 loaded from %s", bias.x(), bias.y(), bias.z(),
+               calibration_file.c_str());
+    }
+    else
+    {
+      ROS_WARN("calibration file %s does not exist: calibrating from the first %.1f s of data "
+               "(call ~save_calibration to write it)",
+               calibration_file.c_str(), params_.core.calibration_duration);
+    }
+  }
+  frame_filter_ = FrameFilter(params_.ros.imu_frame);
+
+  tf_listener_ = std::make_unique<tf2_ros::TransformListener>(tf_buffer_, nh_);
+  if (params_.ros.publish_tf)
+  {
+    tf_broadcaster_ = std::make_unique<tf2_ros::TransformBroadcaster>();
+  }
+
+  filtered_pub_ = nh_.advertise<nav_msgs::Odometry>("odometry/filtered", 50);
+  wave_pub_ = nh_.advertise<nav_msgs::Odometry>("odometry/wave", 50);
+  bias_pub_ = nh_.advertise<BiasState>("bias_state", 50);
+  path_filtered_pub_ = nh_.advertise<nav_msgs::Path>("path/filtered", 1, true);
+  path_raw_pub_ = nh_.advertise<nav_msgs::Path>("path/raw", 1, true);
+
+  updater_ = std::make_unique<diagnostic_updater::Updater>(nh_, pnh_, pnh_.getNamespace());
+  updater_->setHardwareID(frame_filter_.known() ? frame_filter_.expected() : std::string("imu"));
+  updater_->add("bias compensation", this, &CompensatorRos::diagnose);
+  diag_prev_time_ = ros::Time::now();
+  diagnostic_timer_ =
+      pnh_.createTimer(ros::Duration(params_.ros.diagnostic_period), &CompensatorRos::diagnosticTimer, this);
+
+  calibrate_srv_ = pnh_.advertiseService("calibrate", &CompensatorRos::calibrate, this);
+  save_srv_ = pnh_.advertiseService("save_calibration", &CompensatorRos::saveCalibration, this);
+
+  reconfigure_server_ = std::make_unique<dynamic_reconfigure::Server<TuningConfig>>(mutex_, pnh_);
+  reconfigure_server_->setCallback(
+      [this](TuningConfig& config, uint32_t level) { reconfigure(config, level); });
+
+  imu_sub_ = nh_.subscribe("imu/data", 200, &CompensatorRos::imuCallback, this, ros::TransportHints().tcpNoDelay());
+  ROS_INFO("bias compensation (%s mode) listening on %s, publishing %s and %s",
+           toString(params_.core.mode).c_str(), imu_sub_.getTopic().c_str(), filtered_pub_.getTopic().c_str(),
+           wave_pub_.getTopic().c_str());
+}
+
+CompensatorRos::~CompensatorRos() = default;
+
+void CompensatorRos::imuCallback(const sensor_msgs::Imu::ConstPtr& msg)
+{
+  boost::recursive_mutex::scoped_lock lock(mutex_);
+  ++counters_.received;
+  last_receive_ = ros::Time::now();
+
+  if (!frame_filter_.accept(msg->header.frame_id))
+  {
+    ++counters_.rejected_wrong_frame;
+    ROS_WARN_THROTTLE(kWarnPeriod, "imu/data: frame_id '%s' is not the expected '%s': message dropped (%" PRIu64
+                                   " so far)",
+                      msg->header.frame_id.c_str(), frame_filter_.expected().c_str(), counters_.rejected_wrong_frame);
+    return;
+  }
+  if (counters_.received == 1 && params_.ros.imu_frame.empty())
+  {
+    updater_->setHardwareID(frame_filter_.expected());
+  }
+  if (!updateMounting(*msg))
+  {
+    ++counters_.waiting_for_mounting;
+    return;
+  }
+
+  const ImuSample sample = toImuSample(*msg, mounting_);
+  CompensatorOutput out;
+  const SampleStatus status = compensator_->addSample(sample, &out);
+  switch (status)
+  {
+    case SampleStatus::kAccepted:
+      break;
+    case SampleStatus::kRejectedNonFinite:
+    case SampleStatus::kRejectedBadQuaternion:
+    case SampleStatus::kRejectedDuplicate:
+      ROS_WARN_THROTTLE(kWarnPeriod, "imu/data: sample at t = %.3f s dropped: %s", sample.t, toString(status).c_str());
+      return;
+    case SampleStatus::kResetBackwards:
+      ROS_WARN_THROTTLE(kWarnPeriod, "imu/data: stamp went backwards (t = %.3f s): estimator and paths reset",
+                        sample.t);
+      raw_.reset();
+      clearPaths();
+      break;
+    case SampleStatus::kGapReset:
+      ROS_WARN_THROTTLE(kWarnPeriod, "imu/data: gap longer than max_gap = %.2f s before t = %.3f s: integration reset",
+                        compensator_->config().max_gap, sample.t);
+      break;
+  }
+  publishOutputs(*msg, out, status);
+}
+
+bool CompensatorRos::updateMounting(const sensor_msgs::Imu& msg)
+{
+  if (mounting_state_ != MountingState::kWaiting)
+  {
+    if (mounting_state_ == MountingState::kFallback)
+    {
+      ROS_WARN_THROTTLE(60.0, "no transform %s -> %s: using the identity as IMU mounting",
+                        msg.header.frame_id.c_str(), params_.ros.base_frame.c_str());
+    }
+    return true;
+  }
+  const std::string& imu_frame = msg.header.frame_id;
+  if (imu_frame == params_.ros.base_frame)
+  {
+    mounting_state_ = MountingState::kIdentity;
+    return true;
+  }
+  try
+  {
+    const geometry_msgs::TransformStamped tf = tf_buffer_.lookupTransform(params_.ros.base_frame, imu_frame, ros::Time(0));
+    const auto& r = tf.transform.rotation;
+    mounting_.imu_to_base = Quaternion(r.w, r.x, r.y, r.z).normalized();
+    if (!mounting_.imu_to_base.coeffs().allFinite())
+    {
+      mounting_.imu_to_base = Quaternion::Identity();
+      throw tf2::TransformException("transform " + imu_frame + " -> " + params_.ros.base_frame +
+                                    " has an invalid rotation");
+    }
+    mounting_state_ = MountingState::kFound;
+    ROS_INFO("IMU mounting %s -> %s: rotation (w x y z) = (%.4f %.4f %.4f %.4f)", imu_frame.c_str(),
+             params_.ros.base_frame.c_str(), mounting_.imu_to_base.w(), mounting_.imu_to_base.x(),
+             mounting_.imu_to_base.y(), mounting_.imu_to_base.z());
+    return true;
+  }
+  catch (const tf2::TransformException& e)
+  {
+    const double t = msg.header.stamp.toSec();
+    if (first_stamp_ < 0.0 || t < first_stamp_)
+    {
+      first_stamp_ = t;
+    }
+    if (t - first_stamp_ < params_.ros.mount_timeout)
+    {
+      ROS_INFO_THROTTLE(1.0, "waiting for the transform %s -> %s", imu_frame.c_str(), params_.ros.base_frame.c_str());
+      return false;
+    }
+    mounting_state_ = MountingState::kFallback;
+    ROS_WARN("no transform %s -> %s after %.1f s (%s): using the identity as IMU mounting", imu_frame.c_str(),
+             params_.ros.base_frame.c_str(), params_.ros.mount_timeout, e.what());
+    return true;
+  }
+}
+
+void CompensatorRos::publishOutputs(const sensor_msgs::Imu& msg, const CompensatorOutput& out, SampleStatus status)
+{
+  const ros::Time& stamp = msg.header.stamp;
+  const OdometryFrames frames{ params_.ros.odom_frame, params_.ros.base_frame };
+  const nav_msgs::Odometry filtered = toOdometry(out, OdometryKind::kFiltered, msg, mounting_, frames, stamp);
+  const nav_msgs::Odometry wave = toOdometry(out, OdometryKind::kWave, msg, mounting_, frames, stamp);
+  const BiasState bias = toBiasState(out, compensator_->config().mode, params_.ros.odom_frame, stamp);
+  if (!allFinite(filtered) || !allFinite(wave) || !allFinite(bias) || !out.acceleration_level.allFinite())
+  {
+    ++counters_.nonfinite_outputs;
+    ROS_ERROR_THROTTLE(kWarnPeriod, "estimator output at t = %.3f s is not finite: not published (%" PRIu64 " so far)",
+                       out.t, counters_.nonfinite_outputs);
+    return;
+  }
+  filtered_pub_.publish(filtered);
+  wave_pub_.publish(wave);
+  bias_pub_.publish(bias);
+  if (tf_broadcaster_)
+  {
+    geometry_msgs::TransformStamped tf;
+    tf.header = filtered.header;
+    tf.child_frame_id = filtered.child_frame_id;
+    tf.transform.translation.x = filtered.pose.pose.position.x;
+    tf.transform.translation.y = filtered.pose.pose.position.y;
+    tf.transform.translation.z = filtered.pose.pose.position.z;
+    tf.transform.rotation = filtered.pose.pose.orientation;
+    tf_broadcaster_->sendTransform(tf);
+  }
+  has_output_ = true;
+  last_output_ = out;
+  raw_.add(out.t, out.acceleration_level, status == SampleStatus::kGapReset);
+  appendPaths(stamp, out);
+}
+
+void CompensatorRos::appendPaths(const ros::Time& stamp, const CompensatorOutput& out)
+{
+  const double t = stamp.toSec();
+  if (last_path_stamp_ >= 0.0 && t - last_path_stamp_ < 1.0 / params_.ros.path_rate)
+  {
+    return;
+  }
+  last_path_stamp_ = t;
+  const Quaternion q = out.orientation.normalized();
+  path_filtered_.push_back(poseStamped(params_.ros.odom_frame, stamp, out.position_filtered, q));
+  path_raw_.push_back(poseStamped(params_.ros.odom_frame, stamp, raw_.position(), q));
+  const auto max_length = static_cast<std::size_t>(params_.ros.path_max_length);
+  while (path_filtered_.size() > max_length)
+  {
+    path_filtered_.pop_front();
+  }
+  while (path_raw_.size() > max_length)
+  {
+    path_raw_.pop_front();
+  }
+  if (path_filtered_pub_.getNumSubscribers() > 0)
+  {
+    path_filtered_pub_.publish(toPath(path_filtered_, params_.ros.odom_frame, stamp));
+  }
+  if (path_raw_pub_.getNumSubscribers() > 0)
+  {
+    path_raw_pub_.publish(toPath(path_raw_, params_.ros.odom_frame, stamp));
+  }
+}
+
+void CompensatorRos::clearPaths()
+{
+  path_filtered_.clear();
+  path_raw_.clear();
+  last_path_stamp_ = -1.0;
+}
+
+void CompensatorRos::reconfigure(TuningConfig& config, uint32_t /*level*/)
+{
+  boost::recursive_mutex::scoped_lock lock(mutex_);
+  if (first_reconfigure_)
+  {
+    // The server's first call carries what it read from the parameter server; the start-up
+    // parameters, already validated, win and are shown to clients.
+    first_reconfigure_ = false;
+    toTuning(compensator_->config(), &config);
+    return;
+  }
+  CompensatorConfig next = compensator_->config();
+  std::string why;
+  if (!applyTuning(config, &next, &why) || !compensator_->setConfig(next, &why))
+  {
+    ROS_ERROR("reconfigure refused, keeping the previous parameters: %s", why.c_str());
+    // The server stores and returns the config it handed us: writing the running values back
+    // makes the client see the refusal (the same effect as updateConfig, without re-entering).
+    toTuning(compensator_->config(), &config);
+    return;
+  }
+  params_.core = compensator_->config();
+  ROS_INFO("reconfigured: mode %s, constant %s, periodic %s", toString(params_.core.mode).c_str(),
+           params_.core.enable_constant ? "on" : "off", params_.core.enable_periodic ? "on" : "off");
+}
+
+bool CompensatorRos::calibrate(std_srvs::Trigger::Request& /*req*/, std_srvs::Trigger::Response& res)
+{
+  boost::recursive_mutex::scoped_lock lock(mutex_);
+  compensator_->recalibrate();
+  calibration_source_ = "calibration window";
+  std::ostringstream message;
+  message << "constant-bias calibration restarts at the next sample and uses " << params_.core.calibration_duration
+          << " s of data"
+          << (params_.core.assume_static_calibration ? "; keep the sensor still until then" : "")
+          << "; call ~save_calibration afterwards to store it";
+  res.success = true;
+  res.message = message.str();
+  ROS_INFO("%s", res.message.c_str());
+  return true;
+}
+
+bool CompensatorRos::saveCalibration(std_srvs::Trigger::Request& /*req*/, std_srvs::Trigger::Response& res)
+{
+  boost::recursive_mutex::scoped_lock lock(mutex_);
+  const std::string& path = params_.ros.calibration_file;
+  res.success = false;
+  if (path.empty())
+  {
+    res.message = "parameter ~calibration_file is not set: nothing written";
+  }
+  else if (!compensator_->calibrated())
+  {
+    res.message = "not calibrated yet (calibration window still running): nothing written";
+  }
+  else
+  {
+    std::string why;
+    const Vector3 bias = compensator_->constantBias();
+    if (periodic_bias_compensation::saveCalibration(path, bias, &why))
+    {
+      res.success = true;
+      std::ostringstream message;
+      message << "constant bias [" << bias.x() << ", " << bias.y() << ", " << bias.z() << "] m/s^2 written to "
+              << path;
+      res.message = message.str();
+    }
+    else
+    {
+      res.message = why;
+    }
+  }
+  if (res.success)
+  {
+    ROS_INFO("%s", res.message.c_str());
+  }
+  else
+  {
+    ROS_WARN("save_calibration: %s", res.message.c_str());
+  }
+  return true;
+}
+
+void CompensatorRos::diagnosticTimer(const ros::TimerEvent& /*event*/)
+{
+  boost::recursive_mutex::scoped_lock lock(mutex_);
+  updater_->force_update();
+}
+
+void CompensatorRos::diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat)
+{
+  boost::recursive_mutex::scoped_lock lock(mutex_);
+  using diagnostic_msgs::DiagnosticStatus;
+  const ros::Time now = ros::Time::now();
+  const CompensatorCounters& core = compensator_->counters();
+  const double interval = (now - diag_prev_time_).toSec();
+
+  std::uint8_t level = DiagnosticStatus::OK;
+  std::vector<std::string> messages;
+  auto raise = [&level, &messages](std::uint8_t l, const std::string& message) {
+    level = std::max(level, l);
+    messages.push_back(message);
+  };
+  auto since = [](std::uint64_t now_count, std::uint64_t prev_count) { return now_count - prev_count; };
+
+  if (counters_.received == 0)
+  {
+    raise(DiagnosticStatus::WARN, "waiting for IMU data on " + imu_sub_.getTopic());
+  }
+  else
+  {
+    const double silence = (now - last_receive_).toSec();
+    if (silence > std::max(2.0, 3.0 * params_.ros.diagnostic_period))
+    {
+      std::ostringstream m;
+      m.precision(1);
+      m << std::fixed << "no IMU data for " << silence << " s";
+      raise(DiagnosticStatus::ERROR, m.str());
+    }
+  }
+  const std::uint64_t bad_outputs = since(counters_.nonfinite_outputs, diag_wrapper_prev_.nonfinite_outputs);
+  if (bad_outputs > 0)
+  {
+    raise(DiagnosticStatus::ERROR, std::to_string(bad_outputs) + " non-finite outputs suppressed");
+  }
+  std::vector<std::string> rejected;
+  auto count = [&rejected](std::uint64_t n, const std::string& what) {
+    if (n > 0)
+    {
+      rejected.push_back(std::to_string(n) + " " + what);
+    }
+  };
+  count(since(core.rejected_non_finite, diag_core_prev_.rejected_non_finite), "non-finite");
+  count(since(core.rejected_bad_quaternion, diag_core_prev_.rejected_bad_quaternion), "bad quaternion");
+  count(since(core.rejected_duplicate, diag_core_prev_.rejected_duplicate), "duplicate stamp");
+  count(since(counters_.rejected_wrong_frame, diag_wrapper_prev_.rejected_wrong_frame), "wrong frame_id");
+  if (!rejected.empty())
+  {
+    std::string joined = "samples dropped: ";
+    for (std::size_t i = 0; i < rejected.size(); ++i)
+    {
+      joined += (i > 0 ? ", " : "") + rejected[i];
+    }
+    raise(DiagnosticStatus::WARN, joined);
+  }
+  if (since(core.resets_backwards, diag_core_prev_.resets_backwards) > 0)
+  {
+    raise(DiagnosticStatus::WARN, "time went backwards: estimator reset");
+  }
+  if (since(core.gap_resets, diag_core_prev_.gap_resets) > 0)
+  {
+    raise(DiagnosticStatus::WARN, "gap in IMU data: integration reset");
+  }
+  if (since(core.rate_changes, diag_core_prev_.rate_changes) > 0)
+  {
+    raise(DiagnosticStatus::WARN, "IMU sample rate changed: period search restarted");
+  }
+  if (mounting_state_ == MountingState::kFallback)
+  {
+    raise(DiagnosticStatus::WARN, "no transform " + frame_filter_.expected() + " -> " + params_.ros.base_frame +
+                                      ": identity mounting assumed");
+  }
+  if (counters_.received > 0 && !compensator_->calibrated())
+  {
+    raise(DiagnosticStatus::WARN, "calibrating constant bias");
+  }
+  if (messages.empty())
+  {
+    messages.push_back("compensating");
+  }
+  std::string summary;
+  for (std::size_t i = 0; i < messages.size(); ++i)
+  {
+    summary += (i > 0 ? "; " : "") + messages[i];
+  }
+  stat.summary(level, summary);
+
+  stat.add("mode", toString(compensator_->config().mode));
+  stat.add("input topic", imu_sub_.getTopic());
+  stat.add("input frame", frame_filter_.known() ? frame_filter_.expected() : std::string("(not seen yet)"));
+  stat.addf("input rate [Hz]", "%.2f",
+            interval > 0.0 ? static_cast<double>(since(counters_.received, diag_wrapper_prev_.received)) / interval : 0.0);
+  stat.addf("estimated sample rate [Hz]", "%.2f", core.sample_rate);
+  stat.add("received", counters_.received);
+  stat.add("accepted", core.accepted);
+  stat.add("rejected non-finite", core.rejected_non_finite);
+  stat.add("rejected bad quaternion", core.rejected_bad_quaternion);
+  stat.add("rejected duplicate stamp", core.rejected_duplicate);
+  stat.add("rejected wrong frame", counters_.rejected_wrong_frame);
+  stat.add("dropped waiting for mounting", counters_.waiting_for_mounting);
+  stat.add("backwards resets", core.resets_backwards);
+  stat.add("gap resets", core.gap_resets);
+  stat.add("sample rate changes", core.rate_changes);
+  stat.add("non-finite outputs suppressed", counters_.nonfinite_outputs);
+  const char* mounting_names[] = { "waiting for tf", "from tf", "identity (imu frame is base frame)",
+                                   "identity (tf lookup failed)" };
+  stat.add("mounting", mounting_names[static_cast<int>(mounting_state_)]);
+  stat.add("calibration", compensator_->calibrated() ? "done (" + calibration_source_ + ")" : std::string("running"));
+  const Vector3 bias = compensator_->constantBias();
+  stat.addf("constant bias [m/s^2]", "%.5f %.5f %.5f", bias.x(), bias.y(), bias.z());
+  for (int i = 0; i < 3; ++i)
+  {
+    const std::string key = std::string("period lock ") + kAxisNames[i];
+    if (has_output_ && last_output_.axes[i].locked)
+    {
+      stat.addf(key, "locked, %.3f Hz (L = %.1f samples)", last_output_.axes[i].frequency,
+                last_output_.axes[i].period_samples);
+    }
+    else
+    {
+      stat.add(key, "not locked");
+    }
+  }
+
+  diag_core_prev_ = core;
+  diag_wrapper_prev_ = counters_;
+  diag_prev_time_ = now;
+}
+
+}  // namespace periodic_bias_compensation

@@ -1,0 +1,313 @@
+// compensate_bag: runs the compensator over a bag at full speed, without a ROS master, and writes
+// the same outputs as the node (odometry/filtered, odometry/wave, bias_state) to a new bag,
+// copying ground_truth/* through.
+//
+//   compensate_bag --in IN.bag --out OUT.bag [--mode paper|default] [--params FILE.yaml]
+//                  [--imu-topic imu/data]
+//
+// The output is written to a temporary file next to OUT and renamed when complete, so a failure
+// never leaves a partial OUT behind; IN is never overwritten. Exit status: 0 success, 1 error,
+// 2 wrong command line.
+#include <chrono>
+#include <cinttypes>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <map>
+#include <set>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <rosbag/bag.h>
+#include <rosbag/view.h>
+#include <unistd.h>
+
+#include "periodic_bias_compensation/core/calibration_file.h"
+#include "periodic_bias_compensation/core/compensator.h"
+#include "periodic_bias_compensation/ros/conversions.h"
+#include "periodic_bias_compensation/ros/parameters.h"
+
+namespace fs = std::filesystem;
+using namespace periodic_bias_compensation;
+
+namespace
+{
+const char* const kUsage =
+    "usage: compensate_bag --in IN.bag --out OUT.bag [--mode paper|default] [--params FILE.yaml]\n"
+    "                      [--imu-topic imu/data]\n"
+    "Runs the bias compensator over IN.bag and writes odometry/filtered, odometry/wave and\n"
+    "bias_state (plus ground_truth/* copied through) to OUT.bag. --params takes a YAML file with\n"
+    "the keys of config/compensator.yaml; --mode overrides its 'mode'.\n";
+
+struct Options
+{
+  std::string in;
+  std::string out;
+  std::string mode;
+  std::string params;
+  std::string imu_topic = "imu/data";
+};
+
+/// Thrown for a wrong command line (exit status 2).
+struct UsageError : std::runtime_error
+{
+  using std::runtime_error::runtime_error;
+};
+
+Options parseArguments(int argc, char** argv)
+{
+  Options options;
+  const std::map<std::string, std::string*> flags = {
+    { "--in", &options.in }, { "--out", &options.out }, { "--mode", &options.mode },
+    { "--params", &options.params }, { "--imu-topic", &options.imu_topic },
+  };
+  for (int i = 1; i < argc; ++i)
+  {
+    const std::string arg = argv[i];
+    if (arg == "-h" || arg == "--help")
+    {
+      std::cout << kUsage;
+      std::exit(0);
+    }
+    const auto it = flags.find(arg);
+    if (it == flags.end())
+    {
+      throw UsageError("unknown argument '" + arg + "'");
+    }
+    if (i + 1 >= argc)
+    {
+      throw UsageError("missing value after " + arg);
+    }
+    *it->second = argv[++i];
+  }
+  if (options.in.empty() || options.out.empty())
+  {
+    throw UsageError("--in and --out are required");
+  }
+  return options;
+}
+
+/// "imu/data" and "/imu/data" name the same topic in a bag written without a namespace.
+std::string absoluteTopic(const std::string& topic)
+{
+  return (!topic.empty() && topic.front() == '/') ? topic : "/" + topic;
+}
+
+bool isGroundTruth(const std::string& topic)
+{
+  return absoluteTopic(topic).rfind("/ground_truth/", 0) == 0;
+}
+
+Parameters loadParameters(const Options& options)
+{
+  Parameters params;
+  std::string why;
+  if (!options.params.empty())
+  {
+    if (!readParameters(YamlParameterSource(options.params), &params, &why))
+    {
+      throw std::runtime_error(options.params + ": " + why);
+    }
+  }
+  if (!options.mode.empty())
+  {
+    if (!modeFromString(options.mode, &params.core.mode))
+    {
+      throw UsageError("--mode must be 'paper' or 'default', got '" + options.mode + "'");
+    }
+  }
+  return params;
+}
+
+/// Writes the outputs of one bag; the caller owns the temporary file.
+class BagCompensator
+{
+public:
+  BagCompensator(const Options& options, const Parameters& params)
+    : options_(options), params_(params), compensator_(params.core), frame_filter_(params.ros.imu_frame)
+  {
+    if (!params_.ros.calibration_file.empty())
+    {
+      Vector3 bias;
+      std::string why;
+      if (!loadCalibration(params_.ros.calibration_file, &bias, &why) || !compensator_.setConstantBias(bias))
+      {
+        throw std::runtime_error("parameter 'calibration_file': " + why);
+      }
+    }
+  }
+
+  void run(const std::string& temp_path)
+  {
+    rosbag::Bag in;
+    in.open(options_.in, rosbag::bagmode::Read);
+    const std::string imu_topic = absoluteTopic(options_.imu_topic);
+
+    rosbag::View all(in);
+    std::set<std::string> topics;
+    bool has_imu = false;
+    for (const rosbag::ConnectionInfo* c : all.getConnections())
+    {
+      topics.insert(c->topic);
+      has_imu = has_imu || absoluteTopic(c->topic) == imu_topic;
+    }
+    if (!has_imu)
+    {
+      std::string list;
+      for (const std::string& t : topics)
+      {
+        list += (list.empty() ? "" : ", ") + t;
+      }
+      throw std::runtime_error("no topic '" + options_.imu_topic + "' in " + options_.in +
+                               " (topics: " + (list.empty() ? "none" : list) + ")");
+    }
+
+    rosbag::Bag out;
+    out.open(temp_path, rosbag::bagmode::Write);
+    out.setCompression(rosbag::compression::LZ4);
+    const ros::Time begin = all.getBeginTime();
+    const double span = std::max((all.getEndTime() - begin).toSec(), 1e-9);
+    auto last_report = std::chrono::steady_clock::now();
+    for (const rosbag::MessageInstance& m : all)
+    {
+      const std::string topic = absoluteTopic(m.getTopic());
+      if (topic == imu_topic)
+      {
+        const sensor_msgs::Imu::ConstPtr imu = m.instantiate<sensor_msgs::Imu>();
+        if (!imu)
+        {
+          throw std::runtime_error("topic '" + m.getTopic() + "' holds " + m.getDataType() + ", not sensor_msgs/Imu");
+        }
+        process(*imu, m.getTime(), &out);
+      }
+      else if (isGroundTruth(topic))
+      {
+        out.write(m.getTopic(), m.getTime(), m, m.getConnectionHeader());
+      }
+      const auto now = std::chrono::steady_clock::now();
+      if (now - last_report > std::chrono::seconds(2))
+      {
+        last_report = now;
+        std::fprintf(stderr, "compensate_bag: %3.0f%% (%.1f of %.1f s)\n",
+                     100.0 * (m.getTime() - begin).toSec() / span, (m.getTime() - begin).toSec(), span);
+      }
+    }
+    out.close();
+    in.close();
+  }
+
+  void printSummary() const
+  {
+    const CompensatorCounters& c = compensator_.counters();
+    std::fprintf(stderr,
+                 "compensate_bag: %" PRIu64 " IMU messages, %" PRIu64 " accepted, rejected: %" PRIu64
+                 " non-finite, %" PRIu64 " bad quaternion, %" PRIu64 " duplicate stamp, %" PRIu64
+                 " wrong frame; resets: %" PRIu64 " backwards, %" PRIu64 " gaps; %" PRIu64
+                 " non-finite outputs not written\n",
+                 received_, c.accepted, c.rejected_non_finite, c.rejected_bad_quaternion, c.rejected_duplicate,
+                 wrong_frame_, c.resets_backwards, c.gap_resets, nonfinite_outputs_);
+  }
+
+private:
+  void process(const sensor_msgs::Imu& imu, const ros::Time& bag_time, rosbag::Bag* out)
+  {
+    ++received_;
+    if (!frame_filter_.accept(imu.header.frame_id))
+    {
+      ++wrong_frame_;
+      return;
+    }
+    if (received_ == 1 && imu.header.frame_id != params_.ros.base_frame)
+    {
+      std::fprintf(stderr, "compensate_bag: no mounting transform offline: %s is taken as aligned with %s\n",
+                   imu.header.frame_id.c_str(), params_.ros.base_frame.c_str());
+    }
+    CompensatorOutput result;
+    const SampleStatus status = compensator_.addSample(toImuSample(imu, mounting_), &result);
+    if (status != SampleStatus::kAccepted && status != SampleStatus::kGapReset &&
+        status != SampleStatus::kResetBackwards)
+    {
+      return;
+    }
+    const OdometryFrames frames{ params_.ros.odom_frame, params_.ros.base_frame };
+    const nav_msgs::Odometry filtered = toOdometry(result, OdometryKind::kFiltered, imu, mounting_, frames,
+                                                   imu.header.stamp);
+    const nav_msgs::Odometry wave = toOdometry(result, OdometryKind::kWave, imu, mounting_, frames, imu.header.stamp);
+    const BiasState bias = toBiasState(result, compensator_.config().mode, params_.ros.odom_frame, imu.header.stamp);
+    if (!allFinite(filtered) || !allFinite(wave) || !allFinite(bias))
+    {
+      ++nonfinite_outputs_;
+      return;
+    }
+    out->write("/odometry/filtered", bag_time, filtered);
+    out->write("/odometry/wave", bag_time, wave);
+    out->write("/bias_state", bag_time, bias);
+  }
+
+  const Options& options_;
+  const Parameters& params_;
+  Compensator compensator_;
+  FrameFilter frame_filter_;
+  Mounting mounting_;
+  std::uint64_t received_ = 0;
+  std::uint64_t wrong_frame_ = 0;
+  std::uint64_t nonfinite_outputs_ = 0;
+};
+
+/// Checks the input exists and that OUT cannot clobber it.
+void checkPaths(const Options& options)
+{
+  std::error_code ec;
+  if (!fs::is_regular_file(options.in, ec))
+  {
+    throw std::runtime_error("input bag '" + options.in + "' does not exist or is not a file");
+  }
+  const fs::path in = fs::weakly_canonical(options.in, ec);
+  const fs::path out = fs::weakly_canonical(options.out, ec);
+  if (in == out || (fs::exists(options.out, ec) && fs::equivalent(options.in, options.out, ec)))
+  {
+    throw std::runtime_error("--out must differ from --in ('" + options.in + "' would be overwritten)");
+  }
+  const fs::path dir = out.parent_path();
+  if (!dir.empty() && !fs::is_directory(dir, ec))
+  {
+    throw std::runtime_error("output directory '" + dir.string() + "' does not exist");
+  }
+}
+}  // namespace
+
+int main(int argc, char** argv)
+{
+  Options options;
+  std::string temp_path;
+  try
+  {
+    options = parseArguments(argc, argv);
+    checkPaths(options);
+    const Parameters params = loadParameters(options);
+    BagCompensator compensator(options, params);
+    temp_path = options.out + ".partial-" + std::to_string(::getpid());
+    compensator.run(temp_path);
+    fs::rename(temp_path, options.out);
+    temp_path.clear();
+    compensator.printSummary();
+    std::fprintf(stderr, "compensate_bag: wrote %s\n", options.out.c_str());
+    return 0;
+  }
+  catch (const UsageError& e)
+  {
+    std::fprintf(stderr, "compensate_bag: %s\n%s", e.what(), kUsage);
+    return 2;
+  }
+  catch (const std::exception& e)
+  {
+    std::fprintf(stderr, "compensate_bag: error: %s\n", e.what());
+    if (!temp_path.empty())
+    {
+      std::error_code ec;
+      fs::remove(temp_path, ec);
+    }
+    return 1;
+  }
+}
