@@ -8,6 +8,7 @@ target_link_libraries(${PROJECT_NAME}_core PUBLIC Eigen3::Eigen PkgConfig::FFTW3
 
 if(CATKIN_ENABLE_TESTING)
   catkin_add_gtest(test_core
+    test/core/main.cpp
     test/core/test_frequency_tracker.cpp
     test/core/test_compensator.cpp
     test/core/test_bad_input.cpp)

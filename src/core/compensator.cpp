@@ -1,1 +1,918 @@
-// in progress
+#include "periodic_bias_compensation/core/compensator.h"
+
+#include <algorithm>
+#include <cmath>
+#include <deque>
+#include <sstream>
+#include <stdexcept>
+#include <vector>
+
+#include <Eigen/Dense>
+
+namespace periodic_bias_compensation
+{
+namespace
+{
+constexpr int kMaxHarmonics = 4;
+
+bool isFinite(const Vector3& v)
+{
+  return v.allFinite();
+}
+
+/// Last values of a signal with O(1) access to the value L samples ago and an amortised O(1)
+/// sliding mid-range (max + min) / 2 over the last L samples (monotonic deques).
+class SignalHistory
+{
+public:
+  explicit SignalHistory(int capacity = 1) : values_(std::max(capacity, 1), 0.0)
+  {
+  }
+
+  void push(double value)
+  {
+    values_[index_ % values_.size()] = value;
+    pushExtremes(index_, value);
+    ++index_;
+  }
+  int size() const
+  {
+    return static_cast<int>(std::min<long>(index_, static_cast<long>(values_.size())));
+  }
+  int capacity() const
+  {
+    return static_cast<int>(values_.size());
+  }
+  /// Value pushed `lag` pushes ago (lag 1 = newest).
+  double ago(int lag) const
+  {
+    return values_[(index_ - lag) % static_cast<long>(values_.size())];
+  }
+  /// (max + min) / 2 over the last `window` values (window <= size()).
+  double midRange(int window)
+  {
+    if (window != window_)
+    {
+      window_ = window;
+      rebuildExtremes();
+    }
+    return 0.5 * (values_[max_.front() % values_.size()] + values_[min_.front() % values_.size()]);
+  }
+  void clear()
+  {
+    index_ = 0;
+    max_.clear();
+    min_.clear();
+  }
+
+private:
+  void pushExtremes(long index, double value)
+  {
+    if (window_ <= 0)
+      return;
+    while (!max_.empty() && values_[max_.back() % values_.size()] <= value)
+      max_.pop_back();
+    max_.push_back(index);
+    while (!min_.empty() && values_[min_.back() % values_.size()] >= value)
+      min_.pop_back();
+    min_.push_back(index);
+    while (max_.front() <= index - window_)
+      max_.pop_front();
+    while (min_.front() <= index - window_)
+      min_.pop_front();
+  }
+  void rebuildExtremes()
+  {
+    max_.clear();
+    min_.clear();
+    const long first = std::max(0L, index_ - window_);
+    for (long i = first; i < index_; ++i)
+      pushExtremes(i, values_[i % values_.size()]);
+  }
+
+  std::vector<double> values_;
+  long index_ = 0;
+  int window_ = 0;
+  std::deque<long> max_, min_;
+};
+
+/// Recursive least squares with exponential forgetting on [1, cos(k phi), sin(k phi)], k=1..H.
+class HarmonicEstimator
+{
+public:
+  void reset(int harmonics)
+  {
+    harmonics_ = harmonics;
+    const int n = 1 + 2 * harmonics;
+    theta_ = Eigen::VectorXd::Zero(n);
+    covariance_ = Eigen::MatrixXd::Identity(n, n) * 1e4;
+    regressor_ = Eigen::VectorXd::Zero(n);
+    gain_ = Eigen::VectorXd::Zero(n);
+    updates_ = 0;
+  }
+  /// One update with forgetting factor lambda; returns the a-priori residual.
+  double update(double phase, double value, double lambda)
+  {
+    fillRegressor(phase);
+    const double residual = value - theta_.dot(regressor_);
+    gain_.noalias() = covariance_ * regressor_;
+    const double denominator = lambda + regressor_.dot(gain_);
+    gain_ /= denominator;
+    theta_.noalias() += gain_ * residual;
+    covariance_ -= gain_ * (regressor_.transpose() * covariance_);
+    covariance_ /= lambda;
+    covariance_ = 0.5 * (covariance_ + covariance_.transpose()).eval();
+    ++updates_;
+    return residual;
+  }
+  /// Periodic part (without the constant) of the acceleration, its displacement and velocity
+  /// for the current phase; omega [rad/s] is the fundamental. variance_factor: h' P h of the
+  /// displacement (multiply by the residual variance).
+  void evaluate(double phase, double omega, double* acceleration, double* position, double* velocity,
+                double* variance_factor) const
+  {
+    double a = 0.0, x = 0.0, v = 0.0;
+    Eigen::VectorXd dx = Eigen::VectorXd::Zero(theta_.size());
+    for (int k = 1; k <= harmonics_; ++k)
+    {
+      const double c = std::cos(k * phase), s = std::sin(k * phase);
+      const double ck = theta_[2 * k - 1], sk = theta_[2 * k];
+      const double w = k * omega;
+      a += ck * c + sk * s;
+      x += -(ck * c + sk * s) / (w * w);
+      v += (ck * s - sk * c) / w;
+      dx[2 * k - 1] = -c / (w * w);
+      dx[2 * k] = -s / (w * w);
+    }
+    *acceleration = a;
+    *position = x;
+    *velocity = v;
+    *variance_factor = dx.dot(covariance_ * dx);
+  }
+  double constant() const
+  {
+    return theta_.size() > 0 ? theta_[0] : 0.0;
+  }
+  long updates() const
+  {
+    return updates_;
+  }
+
+private:
+  void fillRegressor(double phase)
+  {
+    regressor_[0] = 1.0;
+    for (int k = 1; k <= harmonics_; ++k)
+    {
+      regressor_[2 * k - 1] = std::cos(k * phase);
+      regressor_[2 * k] = std::sin(k * phase);
+    }
+  }
+
+  int harmonics_ = 1;
+  Eigen::VectorXd theta_, regressor_, gain_;
+  Eigen::MatrixXd covariance_;
+  long updates_ = 0;
+};
+
+/// Least-squares constant of [1, cos, sin harmonics] at a known frequency over a record:
+/// the offset of a periodic signal over a window that is not a whole number of periods.
+double harmonicConstant(const std::vector<double>& values, double rate, double frequency, int harmonics)
+{
+  const int n = 1 + 2 * harmonics;
+  Eigen::MatrixXd normal = Eigen::MatrixXd::Zero(n, n);
+  Eigen::VectorXd rhs = Eigen::VectorXd::Zero(n);
+  Eigen::VectorXd h(n);
+  for (std::size_t i = 0; i < values.size(); ++i)
+  {
+    const double phase = 2.0 * M_PI * frequency * i / rate;
+    h[0] = 1.0;
+    for (int k = 1; k <= harmonics; ++k)
+    {
+      h[2 * k - 1] = std::cos(k * phase);
+      h[2 * k] = std::sin(k * phase);
+    }
+    normal.noalias() += h * h.transpose();
+    rhs.noalias() += h * values[i];
+  }
+  return normal.ldlt().solve(rhs)[0];
+}
+
+Quaternion levelFromSpecificForce(const Vector3& mean_specific_force)
+{
+  // At rest the specific force points up: rotate it onto +z (yaw is unobservable: kept 0).
+  return Quaternion::FromTwoVectors(mean_specific_force.normalized(), Vector3::UnitZ());
+}
+
+}  // namespace
+
+std::string toString(Mode mode)
+{
+  return mode == Mode::kPaper ? "paper" : "default";
+}
+
+bool modeFromString(const std::string& name, Mode* mode)
+{
+  if (name == "paper")
+    *mode = Mode::kPaper;
+  else if (name == "default")
+    *mode = Mode::kDefault;
+  else
+    return false;
+  return true;
+}
+
+std::string toString(SampleStatus status)
+{
+  switch (status)
+  {
+    case SampleStatus::kAccepted:
+      return "accepted";
+    case SampleStatus::kRejectedNonFinite:
+      return "rejected: NaN or Inf in a field";
+    case SampleStatus::kRejectedBadQuaternion:
+      return "rejected: zero or non-unit orientation quaternion";
+    case SampleStatus::kRejectedDuplicate:
+      return "rejected: duplicated stamp";
+    case SampleStatus::kResetBackwards:
+      return "reset: stamp went backwards";
+    case SampleStatus::kGapReset:
+      return "reset: gap in the samples";
+  }
+  return "unknown";
+}
+
+bool CompensatorConfig::validate(std::string* why) const
+{
+  std::ostringstream error;
+  auto check = [&error](bool ok, const std::string& key, const std::string& rule, double value) {
+    if (!ok && error.tellp() == 0)
+      error << key << " = " << value << " is out of range: " << rule;
+  };
+  const char* axis_names[3] = { "x", "y", "z" };
+  for (int i = 0; i < 3; ++i)
+  {
+    const AxisGains& g = gains[i];
+    const std::string axis = axis_names[i];
+    // Comb loop d(t+1) = beta * midrange + alpha * (drift over one period): the velocity/position
+    // error over one period is multiplied by (1 - alpha) each period, so 0 <= alpha < 2 keeps it
+    // stable; the mid-range term adds damping that destabilises the loop above beta = 12
+    // (measured, test_compensator: PaperGainLimits).
+    check(std::isfinite(g.alpha_v) && g.alpha_v >= 0.0 && g.alpha_v < 2.0, "alpha_v_" + axis,
+          "0 <= alpha < 2 (the comb loop is unstable from 2 on)", g.alpha_v);
+    check(std::isfinite(g.alpha_p) && g.alpha_p >= 0.0 && g.alpha_p < 2.0, "alpha_p_" + axis,
+          "0 <= alpha < 2 (the comb loop is unstable from 2 on)", g.alpha_p);
+    check(std::isfinite(g.beta_v) && g.beta_v >= 0.0 && g.beta_v <= 12.0, "beta_v_" + axis,
+          "0 <= beta <= 12 (larger values make the loop oscillate and diverge)", g.beta_v);
+    check(std::isfinite(g.beta_p) && g.beta_p >= 0.0 && g.beta_p <= 12.0, "beta_p_" + axis,
+          "0 <= beta <= 12 (larger values make the loop oscillate and diverge)", g.beta_p);
+  }
+  check(calibration_duration >= 0.0 && calibration_duration <= 3600.0, "calibration_duration",
+        "0 <= s <= 3600", calibration_duration);
+  check(fft_window >= 2.0 && fft_window <= 3600.0, "fft_window", "2 <= s <= 3600", fft_window);
+  check(fft_hop > 0.0 && fft_hop <= fft_window, "fft_hop", "0 < s <= fft_window", fft_hop);
+  check(min_frequency > 0.0, "min_frequency", "> 0 Hz", min_frequency);
+  check(max_frequency > min_frequency, "max_frequency", "> min_frequency", max_frequency);
+  check(min_peak_ratio >= 1.0, "min_peak_ratio", ">= 1", min_peak_ratio);
+  check(harmonics >= 1 && harmonics <= kMaxHarmonics, "harmonics", "1 .. 4", harmonics);
+  check(harmonic_memory >= 0.5, "harmonic_memory", ">= 0.5 s", harmonic_memory);
+  check(drift_time_constant >= 0.5, "drift_time_constant",
+        ">= 0.5 s (faster drift removal would follow the waves)", drift_time_constant);
+  check(gravity > 9.0 && gravity < 10.5, "gravity", "9.0 < g < 10.5 m/s^2", gravity);
+  check(max_gap > 0.0, "max_gap", "> 0 s", max_gap);
+  check(max_rate_change > 0.0 && max_rate_change < 1.0, "max_rate_change", "0 < r < 1", max_rate_change);
+  check(max_quaternion_norm_error > 0.0 && max_quaternion_norm_error < 0.5, "max_quaternion_norm_error",
+        "0 < e < 0.5", max_quaternion_norm_error);
+  if (error.tellp() == 0)
+    return true;
+  if (why)
+    *why = error.str();
+  return false;
+}
+
+/// Estimator of one level axis.
+struct AxisEstimator
+{
+  // Period search.
+  std::unique_ptr<FrequencyTracker> tracker;
+  bool locked = false;
+  double frequency = 0.0;
+  double amplitude = 0.0;
+
+  // Default mode: harmonic tracker + third-order drift observer.
+  HarmonicEstimator harmonic;
+  double phase = 0.0;
+  double slow_p = 0.0, slow_v = 0.0, bias = 0.0;
+  double residual_variance = 0.0;
+
+  // Paper mode: integrals, period tables, drift terms.
+  double paper_v = 0.0, paper_y = 0.0;
+  double d_v = 0.0, d_p = 0.0;
+  double constant_d_p = 0.0;  ///< mean velocity of the calibration window [m/s] (Table 1)
+  SignalHistory v_table, y_table;
+  double y_sum = 0.0, v_sum = 0.0;  ///< running sums over the last L samples (outputs)
+  int sum_window = 0;
+  double time_since_reset = 0.0;
+};
+
+class CompensatorImpl
+{
+public:
+  explicit CompensatorImpl(const CompensatorConfig& config) : config_(config)
+  {
+    std::string why;
+    if (!config_.validate(&why))
+      throw std::invalid_argument("invalid compensator configuration: " + why);
+  }
+
+  bool setConfig(const CompensatorConfig& config, std::string* why)
+  {
+    if (!config.validate(why))
+      return false;
+    const bool restart_search = config.mode != config_.mode || config.fft_window != config_.fft_window ||
+                                config.min_frequency != config_.min_frequency ||
+                                config.max_frequency != config_.max_frequency ||
+                                config.harmonics != config_.harmonics;
+    config_ = config;
+    if (restart_search && rate_ > 0.0)
+    {
+      planTrackers(rate_);
+      resetMotion();
+    }
+    return true;
+  }
+
+  SampleStatus addSample(const ImuSample& sample, CompensatorOutput* out)
+  {
+    if (!std::isfinite(sample.t) || !isFinite(sample.specific_force) || !isFinite(sample.angular_rate) ||
+        (sample.has_orientation && !sample.orientation.coeffs().allFinite()))
+    {
+      ++counters_.rejected_non_finite;
+      return SampleStatus::kRejectedNonFinite;
+    }
+    ImuSample s = sample;
+    if (s.has_orientation)
+    {
+      const double norm = s.orientation.norm();
+      if (std::abs(1.0 - norm) > config_.max_quaternion_norm_error)
+      {
+        ++counters_.rejected_bad_quaternion;
+        return SampleStatus::kRejectedBadQuaternion;
+      }
+      s.orientation.normalize();
+    }
+
+    SampleStatus status = SampleStatus::kAccepted;
+    double dt = 0.0;
+    if (has_last_)
+    {
+      dt = s.t - last_t_;
+      if (dt == 0.0)
+      {
+        ++counters_.rejected_duplicate;
+        return SampleStatus::kRejectedDuplicate;
+      }
+      if (dt < 0.0)
+      {
+        ++counters_.resets_backwards;
+        reset();
+        status = SampleStatus::kResetBackwards;
+      }
+      else if (dt > config_.max_gap)
+      {
+        ++counters_.gap_resets;
+        resetMotion();
+        calibration_buffer_.clear();
+        status = SampleStatus::kGapReset;
+      }
+    }
+    if (status == SampleStatus::kAccepted && has_last_)
+      updateRate(dt);
+    if (!has_last_ || status != SampleStatus::kAccepted)
+      dt = 0.0;
+    has_last_ = true;
+    last_t_ = s.t;
+    ++counters_.accepted;
+
+    if (!has_level_ && !s.has_orientation)
+    {
+      level_ = levelFromSpecificForce(s.specific_force);
+      has_level_ = true;
+    }
+    CompensatorOutput output;
+    if (needsCalibration())
+    {
+      calibration_buffer_.push_back({ s, dt });
+      if (calibration_buffer_.size() == 1)
+        calibration_start_ = s.t;
+      if (s.t - calibration_start_ >= config_.calibration_duration && rate_ > 0.0)
+        finishCalibration(&output);
+      else
+        output = process(s, dt);
+    }
+    else
+    {
+      output = process(s, dt);
+    }
+    if (out)
+      *out = output;
+    return status;
+  }
+
+  void reset()
+  {
+    has_last_ = false;
+    rate_ = 0.0;
+    counters_.sample_rate = 0.0;
+    has_level_ = false;
+    calibration_buffer_.clear();
+    if (!bias_from_file_)
+    {
+      calibrated_ = false;
+      constant_bias_.setZero();
+    }
+    axes_ = {};
+    resetMotion();
+  }
+
+  void recalibrate()
+  {
+    bias_from_file_ = false;
+    calibrated_ = false;
+    calibration_buffer_.clear();
+  }
+
+  bool setConstantBias(const Vector3& bias)
+  {
+    if (!isFinite(bias))
+      return false;
+    constant_bias_ = bias;
+    bias_from_file_ = true;
+    calibrated_ = true;
+    for (int i = 0; i < 3; ++i)
+      axes_[i].bias = bias[i];
+    return true;
+  }
+
+  const CompensatorConfig& config() const
+  {
+    return config_;
+  }
+  bool calibrated() const
+  {
+    return calibrated_;
+  }
+  Vector3 constantBias() const
+  {
+    if (config_.mode == Mode::kDefault && calibrated_)
+      return Vector3(axes_[0].bias, axes_[1].bias, axes_[2].bias);
+    return constant_bias_;
+  }
+  Quaternion levelOrientation() const
+  {
+    return level_;
+  }
+  const CompensatorCounters& counters() const
+  {
+    return counters_;
+  }
+
+private:
+  struct BufferedSample
+  {
+    ImuSample sample;
+    double dt;
+  };
+
+  bool needsCalibration() const
+  {
+    const bool need_bias = config_.enable_constant && !calibrated_;
+    const bool need_level = !level_calibrated_ && !last_had_orientation_;
+    return need_bias || need_level;
+  }
+
+  void updateRate(double dt)
+  {
+    const double rate = 1.0 / dt;
+    if (rate_ <= 0.0)
+    {
+      rate_ = rate;
+      planTrackers(rate_);
+    }
+    else
+    {
+      // Median-like robustness to single jittered stamps: a slow average of the rate.
+      smoothed_rate_ = smoothed_rate_ > 0.0 ? 0.98 * smoothed_rate_ + 0.02 * rate : rate;
+      if (std::abs(smoothed_rate_ - rate_) > config_.max_rate_change * rate_)
+      {
+        ++counters_.rate_changes;
+        rate_ = smoothed_rate_;
+        planTrackers(rate_);
+      }
+    }
+    counters_.sample_rate = rate_;
+  }
+
+  void planTrackers(double rate)
+  {
+    const int window = std::max(16, static_cast<int>(std::lround(config_.fft_window * rate)));
+    const int table = std::max(4, static_cast<int>(std::ceil(rate / config_.min_frequency)) + 2);
+    for (auto& axis : axes_)
+    {
+      axis.tracker = std::make_unique<FrequencyTracker>(window, rate);
+      axis.locked = false;
+      axis.frequency = 0.0;
+      axis.v_table = SignalHistory(table);
+      axis.y_table = SignalHistory(table);
+      axis.sum_window = 0;
+    }
+    hop_samples_ = std::max(1, static_cast<int>(std::lround(config_.fft_hop * rate)));
+    since_analysis_ = 0;
+  }
+
+  /// Forgets the integrated motion and period search, keeps bias, level and sample rate.
+  void resetMotion()
+  {
+    for (auto& axis : axes_)
+    {
+      if (axis.tracker)
+        axis.tracker->clear();
+      axis.locked = false;
+      axis.frequency = 0.0;
+      axis.amplitude = 0.0;
+      axis.harmonic.reset(config_.harmonics);
+      axis.phase = 0.0;
+      axis.slow_p = axis.slow_v = 0.0;
+      axis.residual_variance = 0.0;
+      axis.paper_v = axis.paper_y = 0.0;
+      axis.d_v = axis.d_p = 0.0;
+      axis.v_table.clear();
+      axis.y_table.clear();
+      axis.y_sum = axis.v_sum = 0.0;
+      axis.sum_window = 0;
+      axis.time_since_reset = 0.0;
+    }
+    since_analysis_ = 0;
+  }
+
+  Vector3 levelAcceleration(const ImuSample& s)
+  {
+    last_had_orientation_ = s.has_orientation;
+    const Quaternion& q = s.has_orientation ? s.orientation : level_;
+    return q * s.specific_force - Vector3(0.0, 0.0, config_.gravity);
+  }
+
+  /// Ends the calibration window: level and constant bias from the buffered samples, then the
+  /// window is processed again with them (only past samples are used: causal).
+  void finishCalibration(CompensatorOutput* out)
+  {
+    Vector3 mean_force = Vector3::Zero();
+    bool any_without_orientation = false;
+    for (const auto& b : calibration_buffer_)
+    {
+      mean_force += b.sample.specific_force;
+      any_without_orientation |= !b.sample.has_orientation;
+    }
+    mean_force /= static_cast<double>(calibration_buffer_.size());
+    if (any_without_orientation)
+      level_ = levelFromSpecificForce(mean_force);
+    level_calibrated_ = true;
+
+    std::array<FrequencyEstimate, 3> window_frequency;
+    if (!bias_from_file_)
+    {
+      std::array<std::vector<double>, 3> level;
+      for (auto& l : level)
+        l.reserve(calibration_buffer_.size());
+      for (const auto& b : calibration_buffer_)
+      {
+        const Vector3 a = levelAcceleration(b.sample);
+        for (int i = 0; i < 3; ++i)
+          level[i].push_back(a[i]);
+      }
+      for (int i = 0; i < 3; ++i)
+        constant_bias_[i] = windowOffset(level[i], &window_frequency[i]);
+    }
+    calibrated_ = true;
+    for (int i = 0; i < 3; ++i)
+      axes_[i].bias = constant_bias_[i];
+    if (config_.mode == Mode::kPaper)
+      estimateConstantPositionDrift();
+    resetMotion();
+    // The window's period is known by now: the replay models it from the first sample on, so
+    // that no wave motion leaks into the slow channel while the sliding FFT fills up again.
+    for (int i = 0; i < 3; ++i)
+      if (window_frequency[i].locked && config_.enable_periodic)
+      {
+        axes_[i].locked = true;
+        axes_[i].frequency = window_frequency[i].frequency;
+        axes_[i].amplitude = window_frequency[i].amplitude;
+      }
+    for (const auto& b : calibration_buffer_)
+      *out = process(b.sample, b.dt);
+    calibration_buffer_.clear();
+  }
+
+  /// Offset of one axis over the calibration window: the mean when the window is at rest (paper
+  /// Sec. 3.1, and paper mode), else the constant of a harmonic fit at the window's dominant
+  /// frequency, so that an oscillation over a non-whole number of periods does not bias it.
+  double windowOffset(const std::vector<double>& values, FrequencyEstimate* frequency) const
+  {
+    double mean = 0.0;
+    for (double v : values)
+      mean += v;
+    mean /= values.size();
+    if (config_.assume_static_calibration || config_.mode == Mode::kPaper || values.size() < 16)
+      return mean;
+    FrequencyTracker tracker(static_cast<int>(values.size()), rate_);
+    for (double v : values)
+      tracker.push(v - mean);
+    *frequency = tracker.analyse(config_.min_frequency, std::min(config_.max_frequency, 0.45 * rate_),
+                                 config_.min_peak_ratio);
+    if (!frequency->locked)
+      return mean;
+    return harmonicConstant(values, rate_, frequency->frequency, config_.harmonics);
+  }
+
+  /// Paper Table 1, "distance bias": after the constant acceleration bias is removed, the mean
+  /// velocity over the at-rest window is a constant position drift per unit time.
+  void estimateConstantPositionDrift()
+  {
+    std::array<double, 3> v{ 0, 0, 0 }, sum{ 0, 0, 0 };
+    for (const auto& b : calibration_buffer_)
+    {
+      const Vector3 a = levelAcceleration(b.sample) - constant_bias_;
+      for (int i = 0; i < 3; ++i)
+      {
+        v[i] += a[i] * b.dt;
+        sum[i] += v[i];
+      }
+    }
+    for (int i = 0; i < 3; ++i)
+      axes_[i].constant_d_p = sum[i] / calibration_buffer_.size();
+  }
+
+  CompensatorOutput process(const ImuSample& s, double dt)
+  {
+    CompensatorOutput out;
+    out.t = s.t;
+    out.orientation = s.has_orientation ? s.orientation : level_;
+    const Vector3 a = levelAcceleration(s);
+
+    // Until the window ends the bias is provisional: the running mean of the level acceleration.
+    if (!calibrated_ && config_.enable_constant)
+    {
+      provisional_sum_ = calibration_buffer_.size() <= 1 ? a : provisional_sum_ + a;
+      const Vector3 provisional = provisional_sum_ / std::max<std::size_t>(1, calibration_buffer_.size());
+      for (int i = 0; i < 3; ++i)
+        axes_[i].bias = provisional[i];
+    }
+
+    ++since_analysis_;
+    const bool analyse = since_analysis_ >= hop_samples_;
+    if (analyse)
+      since_analysis_ = 0;
+
+    for (int i = 0; i < 3; ++i)
+    {
+      AxisEstimator& axis = axes_[i];
+      const double bias = config_.enable_constant ? (config_.mode == Mode::kPaper && calibrated_ ? constant_bias_[i] : axis.bias) : 0.0;
+      const double compensated = a[i] - bias;
+      axis.time_since_reset += dt;
+      if (axis.tracker)
+      {
+        axis.tracker->push(compensated);
+        if (analyse && config_.enable_periodic)
+          updateFrequency(axis);
+      }
+      AxisState& state = out.axes[i];
+      if (config_.mode == Mode::kDefault)
+        stepDefault(axis, a[i], compensated, dt, i, &out);
+      else
+        stepPaper(axis, compensated, dt, i, &out);
+      state.constant_bias = bias;
+      state.frequency = axis.locked ? axis.frequency : 0.0;
+      state.locked = axis.locked;
+      state.period_samples = axis.locked && rate_ > 0.0 ? rate_ / axis.frequency : 0.0;
+      state.d_v = axis.d_v;
+      state.d_p = axis.d_p;
+      out.acceleration_level[i] = compensated;
+    }
+    out.calibrated = calibrated_;
+    return out;
+  }
+
+  void updateFrequency(AxisEstimator& axis)
+  {
+    const FrequencyEstimate estimate =
+        axis.tracker->analyse(config_.min_frequency, std::min(config_.max_frequency, 0.45 * rate_), config_.min_peak_ratio);
+    if (!estimate.locked)
+    {
+      // A window shorter than three periods of a held lock (seeded at the end of calibration)
+      // cannot disprove it yet.
+      const bool too_short = axis.locked && axis.tracker->samples() < 3.0 * rate_ / axis.frequency;
+      axis.locked = axis.locked && too_short;
+      return;
+    }
+    const bool jump = !axis.locked || std::abs(estimate.frequency - axis.frequency) > 0.2 * axis.frequency;
+    if (jump)
+    {
+      axis.harmonic.reset(config_.harmonics);
+      axis.phase = 0.0;
+    }
+    axis.locked = true;
+    axis.frequency = estimate.frequency;
+    axis.amplitude = estimate.amplitude;
+  }
+
+  /// Default mode: the periodic acceleration is tracked by a harmonic estimator at the tracked
+  /// frequency (its displacement is obtained in closed form, drift free); what is left feeds a
+  /// third-order observer whose position is pulled to zero mean with time constant
+  /// drift_time_constant, its integral state being the constant bias.
+  void stepDefault(AxisEstimator& axis, double raw, double compensated, double dt, int i, CompensatorOutput* out)
+  {
+    double wave_a = 0.0, wave_x = 0.0, wave_v = 0.0, variance_factor = 0.0;
+    const double omega = 2.0 * M_PI * axis.frequency;
+    if (axis.locked && config_.enable_periodic)
+    {
+      axis.phase = std::fmod(axis.phase + omega * dt, 2.0 * M_PI);
+      const double lambda = std::exp(-dt / config_.harmonic_memory);
+      const double residual = axis.harmonic.update(axis.phase, compensated, lambda);
+      const double beta = 1.0 - lambda;
+      axis.residual_variance = (1.0 - beta) * axis.residual_variance + beta * residual * residual;
+      axis.harmonic.evaluate(axis.phase, omega, &wave_a, &wave_x, &wave_v, &variance_factor);
+    }
+    else if (dt > 0.0)
+    {
+      const double beta = 1.0 - std::exp(-dt / config_.harmonic_memory);
+      axis.residual_variance = (1.0 - beta) * axis.residual_variance + beta * compensated * compensated;
+    }
+
+    const double w = 1.0 / config_.drift_time_constant;
+    const double k1 = 3.0 * w, k2 = 3.0 * w * w, k3 = config_.enable_constant ? w * w * w : 0.0;
+    const double bias = config_.enable_constant ? axis.bias : 0.0;
+    const double dv = (raw - wave_a - bias - k2 * axis.slow_p) * dt;
+    axis.slow_v += dv;
+    const double dp = (axis.slow_v - k1 * axis.slow_p) * dt;
+    axis.slow_p += dp;
+    if (calibrated_ && config_.enable_constant)
+      axis.bias += k3 * axis.slow_p * dt;
+    axis.d_v = -(bias + k2 * axis.slow_p) * dt;
+    axis.d_p = -k1 * axis.slow_p * dt;
+
+    out->position_filtered[i] = axis.slow_p;
+    out->velocity_filtered[i] = axis.slow_v - k1 * axis.slow_p;
+    out->position_wave[i] = wave_x;
+    out->velocity_wave[i] = wave_v;
+    out->axes[i].periodic_bias = wave_a;
+    // White acceleration noise of one-sided density n^2 = 2 sigma^2 dt through the observer:
+    // var(p) = n^2 / (32 w^3), var(v) = 3 n^2 / (32 w) (closed form for a triple pole at -w).
+    const double density = 2.0 * axis.residual_variance * (rate_ > 0.0 ? 1.0 / rate_ : 0.0);
+    out->position_variance[i] = density / (32.0 * w * w * w);
+    out->velocity_variance[i] = 3.0 * density / (32.0 * w);
+    out->wave_position_variance[i] = axis.residual_variance * variance_factor;
+  }
+
+  /// Paper mode, Eq. 1-7 with the decisions of docs/algorithm.md: integrals on the corrected
+  /// values, d_v and d_p are the corrections over one period spread over its L steps, the
+  /// "peaks" are the extremes of the corrected signal's table over the last period.
+  void stepPaper(AxisEstimator& axis, double compensated, double dt, int i, CompensatorOutput* out)
+  {
+    const int period = axis.locked && rate_ > 0.0 ? static_cast<int>(std::lround(rate_ / axis.frequency)) : 0;
+    const bool periodic = config_.enable_periodic && period >= 2 && axis.v_table.size() >= period &&
+                          period <= axis.v_table.capacity();
+    const AxisGains& g = config_.gains[i];
+
+    double v = axis.paper_v + compensated * dt;  // Eq. 2
+    if (periodic)
+    {
+      axis.d_v = g.beta_v * axis.v_table.midRange(period) + g.alpha_v * (v - axis.v_table.ago(period));  // Eq. 6
+      v -= axis.d_v / period;  // Eq. 3
+    }
+    else
+    {
+      axis.d_v = 0.0;
+    }
+    const double constant_drift = config_.enable_constant && calibrated_ ? axis.constant_d_p : 0.0;
+    double y = axis.paper_y + (v - constant_drift) * dt;  // Eq. 4
+    if (periodic)
+    {
+      axis.d_p = g.beta_p * axis.y_table.midRange(period) + g.alpha_p * (y - axis.y_table.ago(period));  // Eq. 7
+      y -= axis.d_p / period;  // Eq. 5
+    }
+    else
+    {
+      axis.d_p = 0.0;
+    }
+    axis.paper_v = v;
+    axis.paper_y = y;
+    axis.v_table.push(v);
+    axis.y_table.push(y);
+
+    // The corrected y still holds the oscillation: its mean over the last period is the slow
+    // motion, the rest the wave motion.
+    const int window = periodic ? period : 1;
+    if (window != axis.sum_window)
+    {
+      axis.sum_window = std::min(window, axis.y_table.size());
+      axis.y_sum = axis.v_sum = 0.0;
+      for (int k = 1; k <= axis.sum_window; ++k)
+      {
+        axis.y_sum += axis.y_table.ago(k);
+        axis.v_sum += axis.v_table.ago(k);
+      }
+    }
+    else
+    {
+      axis.y_sum += y - (axis.y_table.size() > window ? axis.y_table.ago(window + 1) : 0.0);
+      axis.v_sum += v - (axis.v_table.size() > window ? axis.v_table.ago(window + 1) : 0.0);
+    }
+    const double y_slow = axis.y_sum / std::max(1, axis.sum_window);
+    const double v_slow = axis.v_sum / std::max(1, axis.sum_window);
+    out->position_filtered[i] = y_slow;
+    out->velocity_filtered[i] = v_slow;
+    out->position_wave[i] = y - y_slow;
+    out->velocity_wave[i] = v - v_slow;
+    out->axes[i].periodic_bias = periodic ? axis.d_v / (period * dt > 0.0 ? period * dt : 1.0) : 0.0;
+
+    // Integrated white noise since the last reset: no bound is claimed for the paper's loop.
+    const double sigma2 = axis.residual_variance;
+    const double beta = dt > 0.0 ? 1.0 - std::exp(-dt / config_.harmonic_memory) : 0.0;
+    axis.residual_variance = (1.0 - beta) * sigma2 + beta * compensated * compensated;
+    const double density = 2.0 * axis.residual_variance * dt;
+    const double t = axis.time_since_reset;
+    out->position_variance[i] = density * t * t * t / 3.0;
+    out->velocity_variance[i] = density * t;
+    out->wave_position_variance[i] = out->position_variance[i];
+  }
+
+  CompensatorConfig config_;
+  CompensatorCounters counters_;
+  std::array<AxisEstimator, 3> axes_;
+  bool has_last_ = false;
+  double last_t_ = 0.0;
+  double rate_ = 0.0;
+  double smoothed_rate_ = 0.0;
+  int hop_samples_ = 1;
+  int since_analysis_ = 0;
+
+  bool has_level_ = false;
+  bool level_calibrated_ = false;
+  bool last_had_orientation_ = false;
+  Quaternion level_ = Quaternion::Identity();
+
+  bool calibrated_ = false;
+  bool bias_from_file_ = false;
+  Vector3 constant_bias_ = Vector3::Zero();
+  Vector3 provisional_sum_ = Vector3::Zero();
+  double calibration_start_ = 0.0;
+  std::vector<BufferedSample> calibration_buffer_;
+};
+
+Compensator::Compensator(const CompensatorConfig& config) : impl_(std::make_unique<CompensatorImpl>(config))
+{
+}
+Compensator::~Compensator() = default;
+
+bool Compensator::setConfig(const CompensatorConfig& config, std::string* why)
+{
+  return impl_->setConfig(config, why);
+}
+const CompensatorConfig& Compensator::config() const
+{
+  return impl_->config();
+}
+SampleStatus Compensator::addSample(const ImuSample& sample, CompensatorOutput* out)
+{
+  return impl_->addSample(sample, out);
+}
+void Compensator::reset()
+{
+  impl_->reset();
+}
+void Compensator::recalibrate()
+{
+  impl_->recalibrate();
+}
+bool Compensator::setConstantBias(const Vector3& bias)
+{
+  return impl_->setConstantBias(bias);
+}
+bool Compensator::calibrated() const
+{
+  return impl_->calibrated();
+}
+Vector3 Compensator::constantBias() const
+{
+  return impl_->constantBias();
+}
+Quaternion Compensator::levelOrientation() const
+{
+  return impl_->levelOrientation();
+}
+const CompensatorCounters& Compensator::counters() const
+{
+  return impl_->counters();
+}
+
+}  // namespace periodic_bias_compensation

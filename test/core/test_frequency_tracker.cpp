@@ -1,1 +1,74 @@
 #include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "periodic_bias_compensation/core/frequency_tracker.h"
+
+using periodic_bias_compensation::FrequencyEstimate;
+using periodic_bias_compensation::FrequencyTracker;
+
+namespace
+{
+FrequencyEstimate analyseSine(double frequency, double rate, double seconds, double window, double noise)
+{
+  FrequencyTracker tracker(static_cast<int>(window * rate), rate);
+  std::mt19937 rng(3);
+  std::normal_distribution<double> normal(0.0, noise);
+  for (int k = 0; k < seconds * rate; ++k)
+    tracker.push(0.7 * std::sin(2 * M_PI * frequency * k / rate + 0.4) + 0.2 + normal(rng));
+  return tracker.analyse(0.05, 2.0, 30.0);
+}
+}  // namespace
+
+TEST(FrequencyTracker, SubBinAccuracyOnASinusoid)
+{
+  // 30 s window: bins are 0.033 Hz apart; interpolation must do much better than half a bin.
+  for (double f : { 0.3, 0.443, 0.476, 0.61, 1.234 })
+  {
+    const FrequencyEstimate e = analyseSine(f, 87.7, 40.0, 30.0, 0.05);
+    ASSERT_TRUE(e.locked) << f;
+    EXPECT_NEAR(e.frequency, f, 0.002) << "f = " << f;
+    EXPECT_NEAR(e.amplitude, 0.7, 0.07) << "f = " << f;
+  }
+}
+
+TEST(FrequencyTracker, LocksOnAPartlyFilledWindow)
+{
+  // 10 s of data in a 30 s window: 4.4 periods of 0.443 Hz, enough for a lock.
+  const FrequencyEstimate e = analyseSine(0.443, 100.0, 10.0, 30.0, 0.05);
+  ASSERT_TRUE(e.locked);
+  EXPECT_NEAR(e.frequency, 0.443, 0.01);
+}
+
+TEST(FrequencyTracker, NoLockOnNoiseOrConstant)
+{
+  FrequencyTracker tracker(3000, 100.0);
+  std::mt19937 rng(5);
+  std::normal_distribution<double> normal(0.0, 0.1);
+  for (int k = 0; k < 6000; ++k)
+    tracker.push(normal(rng));
+  EXPECT_FALSE(tracker.analyse(0.05, 2.0, 30.0).locked);
+  tracker.clear();
+  for (int k = 0; k < 6000; ++k)
+    tracker.push(9.81);
+  EXPECT_FALSE(tracker.analyse(0.05, 2.0, 30.0).locked);
+}
+
+TEST(FrequencyTracker, IgnoresPeaksOutsideTheBand)
+{
+  // A strong 5 Hz vibration outside [0.05, 2] Hz must not be picked; the weaker 0.5 Hz line is.
+  FrequencyTracker tracker(3000, 100.0);
+  for (int k = 0; k < 3000; ++k)
+    tracker.push(2.0 * std::sin(2 * M_PI * 5.0 * k / 100.0) + 0.3 * std::sin(2 * M_PI * 0.5 * k / 100.0));
+  const FrequencyEstimate e = tracker.analyse(0.05, 2.0, 30.0);
+  ASSERT_TRUE(e.locked);
+  EXPECT_NEAR(e.frequency, 0.5, 0.005);
+}
+
+TEST(FrequencyTracker, RejectsBadConstruction)
+{
+  EXPECT_THROW(FrequencyTracker(8, 100.0), std::invalid_argument);
+  EXPECT_THROW(FrequencyTracker(100, 0.0), std::invalid_argument);
+  EXPECT_THROW(FrequencyTracker(100, NAN), std::invalid_argument);
+}

@@ -61,10 +61,10 @@ struct CompensatorConfig
   double fft_hop = 1.0;          ///< time between FFT updates [s]
   double min_frequency = 0.05;   ///< lowest dominant frequency searched [Hz]
   double max_frequency = 2.0;    ///< highest dominant frequency searched [Hz]
-  double min_peak_ratio = 8.0;   ///< peak power / median power in band needed for a lock [-]
+  double min_peak_ratio = 30.0;  ///< peak power / median power in band needed for a lock [-]
   int harmonics = 2;             ///< harmonics of the dominant frequency tracked (default mode)
   double harmonic_memory = 10.0; ///< time constant of the harmonic estimator [s] (default mode)
-  double drift_time_constant = 20.0;  ///< slow-motion drift removal time constant [s] (default)
+  double drift_time_constant = 2.0;  ///< slow-motion drift removal time constant [s] (default)
 
   double gravity = kStandardGravity;  ///< local gravity magnitude [m/s^2]
   double max_gap = 0.5;          ///< a gap longer than this resets the integration [s]

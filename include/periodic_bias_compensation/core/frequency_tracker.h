@@ -32,6 +32,8 @@ public:
   void clear();
   /// True once the window has been filled.
   bool full() const;
+  /// Samples in the window so far (at most windowSamples()).
+  int samples() const;
   int windowSamples() const { return n_; }
   double sampleRate() const { return rate_; }
 
