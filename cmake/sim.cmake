@@ -17,6 +17,7 @@ if(CATKIN_ENABLE_TESTING)
   catkin_add_gtest(test_sim
     test/sim/main.cpp
     test/sim/test_scenario.cpp
+    test/sim/test_effects.cpp
     test/sim/test_determinism.cpp)
   target_link_libraries(test_sim ${PROJECT_NAME}_sim)
   target_compile_definitions(test_sim PRIVATE
