@@ -18,6 +18,7 @@ if(CATKIN_ENABLE_TESTING)
     test/sim/main.cpp
     test/sim/test_scenario.cpp
     test/sim/test_effects.cpp
+    test/sim/test_motion.cpp
     test/sim/test_determinism.cpp)
   target_link_libraries(test_sim ${PROJECT_NAME}_sim)
   target_compile_definitions(test_sim PRIVATE

@@ -27,8 +27,14 @@ struct Gain
   bool cosine;  // the DOF follows cos(theta) (heave) instead of sin(theta)
 };
 
-std::array<Gain, 6> gains(const std::array<double, 6>& r, double k, double mu)
+std::array<Gain, 6> gains(const Sea& sea, double k, double mu)
 {
+  const double ratio = sea.length * k / kTwoPi;  // length / wavelength
+  std::array<double, 6> r = sea.response;
+  for (double& x : r)
+  {
+    x /= 1.0 + ratio * ratio;
+  }
   const double c = std::cos(mu);
   const double s = std::sin(mu);
   const double c2 = std::cos(2.0 * mu);
@@ -207,7 +213,7 @@ ShipMotion::Dofs ShipMotion::seaDofsDirect(double elapsed, const SlowState& slow
     const double th_ddot = -c.wavenumber * dir.dot(slow.acceleration);
     const double s = std::sin(th);
     const double co = std::cos(th);
-    const std::array<Gain, 6> g = gains(motion_.sea.response, c.wavenumber, c.direction - slow.heading);
+    const std::array<Gain, 6> g = gains(motion_.sea, c.wavenumber, c.direction - slow.heading);
     for (int j = 0; j < 6; ++j)
     {
       const double f0 = g[j].cosine ? co : s;
@@ -262,7 +268,7 @@ void ShipMotion::fillSeaBlock(std::int64_t k0)
     zs[i] = std::sin(th);
     ec[i] = std::cos(we * dt_);
     es[i] = std::sin(we * dt_);
-    const std::array<Gain, 6> g = gains(motion_.sea.response, c.wavenumber, c.direction - slow.heading);
+    const std::array<Gain, 6> g = gains(motion_.sea, c.wavenumber, c.direction - slow.heading);
     int rs = 0;
     int rc = 0;
     for (int j = 0; j < 6; ++j)

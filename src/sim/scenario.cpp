@@ -210,6 +210,7 @@ void parseSea(Mapping& motion, Sea* out)
     throw std::runtime_error("key '" + m.path("components") + "': expected an integer in [1, 5000]");
   }
   out->components = static_cast<int>(components);
+  m.number("length", &out->length);
   if (m.has("response"))
   {
     Mapping r(m.get("response"), m.path("response"));
@@ -431,6 +432,7 @@ void validateScenario(const Scenario& s)
       throw std::runtime_error("key 'motion.sea.systems': motion.type sea needs at least one wave system");
     }
     check("motion.sea.components", m.sea.components, 1, 5000, "");
+    check("motion.sea.length", m.sea.length, 0.0, 500.0, "m");
     for (int j = 0; j < 6; ++j)
     {
       check("motion.sea.response." + dofNames()[j], m.sea.response[j], 0.0, 10.0, "-");

@@ -53,6 +53,9 @@ struct Sea
   /// Response amplitude factors [-] per Dof: surge/sway/heave follow the water particle motion
   /// times the factor, roll/pitch/yaw follow the wave slope times the factor.
   std::array<double, 6> response{ { 0.5, 0.5, 0.9, 0.8, 0.6, 0.1 } };
+  /// Ship length [m]: waves shorter than the ship move it less, every component's response is
+  /// scaled by 1 / (1 + (length / wavelength)^2). 0 = the ship follows the water at a point.
+  double length = 0.0;
 };
 
 /// One leg of a route.
