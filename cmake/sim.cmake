@@ -19,7 +19,8 @@ if(CATKIN_ENABLE_TESTING)
     test/sim/test_scenario.cpp
     test/sim/test_effects.cpp
     test/sim/test_motion.cpp
-    test/sim/test_determinism.cpp)
+    test/sim/test_determinism.cpp
+    test/sim/test_shipped_scenarios.cpp)
   target_link_libraries(test_sim ${PROJECT_NAME}_sim)
   target_compile_definitions(test_sim PRIVATE
     PBC_SCENARIO_DIR="${CMAKE_CURRENT_SOURCE_DIR}/config/scenarios")
