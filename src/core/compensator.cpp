@@ -14,6 +14,10 @@ namespace periodic_bias_compensation
 namespace
 {
 constexpr int kMaxHarmonics = 4;
+/// FFT estimates used to measure the drift of the dominant frequency.
+constexpr std::size_t kFrequencyHistory = 20;
+/// Largest frequency drift believed [Hz/s].
+constexpr double kMaxFrequencySlope = 0.01;
 
 bool isFinite(const Vector3& v)
 {
@@ -153,6 +157,7 @@ public:
   {
     return theta_.size() > 0 ? theta_[0] : 0.0;
   }
+
   long updates() const
   {
     return updates_;
@@ -302,6 +307,10 @@ struct AxisEstimator
   // Default mode: harmonic tracker + third-order drift observer.
   HarmonicEstimator harmonic;
   double phase = 0.0;
+  /// Recent FFT estimates (window centre time [s], frequency [Hz]) for the drift of the period.
+  std::deque<std::pair<double, double>> frequency_history;
+  double frequency_slope = 0.0;  ///< [Hz/s]
+  double frequency_time = 0.0;   ///< centre time of the newest FFT window [s]
   double slow_p = 0.0, slow_v = 0.0, bias = 0.0;
   double residual_variance = 0.0;
 
@@ -542,6 +551,8 @@ private:
       axis.amplitude = 0.0;
       axis.harmonic.reset(config_.harmonics);
       axis.phase = 0.0;
+      axis.frequency_history.clear();
+      axis.frequency_slope = 0.0;
       axis.slow_p = axis.slow_v = 0.0;
       axis.residual_variance = 0.0;
       axis.paper_v = axis.paper_y = 0.0;
@@ -656,6 +667,7 @@ private:
   {
     CompensatorOutput out;
     out.t = s.t;
+    now_ = s.t;
     out.orientation = s.has_orientation ? s.orientation : level_;
     const Vector3 a = levelAcceleration(s);
 
@@ -681,7 +693,7 @@ private:
       axis.time_since_reset += dt;
       if (axis.tracker)
       {
-        axis.tracker->push(compensated);
+        axis.tracker->push(compensated, s.t);
         if (analyse && config_.enable_periodic)
           updateFrequency(axis);
       }
@@ -719,10 +731,53 @@ private:
     {
       axis.harmonic.reset(config_.harmonics);
       axis.phase = 0.0;
+      axis.frequency_history.clear();
     }
     axis.locked = true;
     axis.frequency = estimate.frequency;
     axis.amplitude = estimate.amplitude;
+    axis.frequency_time = now_ - 0.5 * axis.tracker->samples() / rate_;
+    // Only full windows: while it fills, the interpolation bias changes with the data length and
+    // would read as a drift.
+    auto& history = axis.frequency_history;
+    if (!axis.tracker->full())
+      history.clear();
+    else
+      history.emplace_back(axis.frequency_time, axis.frequency);
+    if (history.size() > kFrequencyHistory)
+      history.pop_front();
+    axis.frequency_slope = 0.0;
+    if (history.size() >= 4)
+    {
+      double mt = 0.0, mf = 0.0;
+      for (const auto& [t, f] : history)
+      {
+        mt += t;
+        mf += f;
+      }
+      mt /= history.size();
+      mf /= history.size();
+      double stt = 0.0, stf = 0.0;
+      for (const auto& [t, f] : history)
+      {
+        stt += (t - mt) * (t - mt);
+        stf += (t - mt) * (f - mf);
+      }
+      if (stt > 0.0)
+      {
+        // Believed only when it stands out of the estimates' own scatter (3 standard errors).
+        // Windows one hop apart share most of their data, so their errors are correlated:
+        // the standard error is inflated by sqrt(window / hop), the overlap factor.
+        const double slope = stf / stt;
+        double sse = 0.0;
+        for (const auto& [t, f] : history)
+          sse += std::pow(f - mf - slope * (t - mt), 2);
+        const double overlap = std::sqrt(config_.fft_window / config_.fft_hop);
+        const double standard_error = overlap * std::sqrt(sse / (history.size() - 2) / stt);
+        if (std::abs(slope) > 3.0 * standard_error)
+          axis.frequency_slope = std::clamp(slope, -kMaxFrequencySlope, kMaxFrequencySlope);
+      }
+    }
   }
 
   /// Default mode: the periodic acceleration is tracked by a harmonic estimator at the tracked
@@ -732,9 +787,12 @@ private:
   void stepDefault(AxisEstimator& axis, double raw, double compensated, double dt, int i, CompensatorOutput* out)
   {
     double wave_a = 0.0, wave_x = 0.0, wave_v = 0.0, variance_factor = 0.0;
-    const double omega = 2.0 * M_PI * axis.frequency;
     if (axis.locked && config_.enable_periodic)
     {
+      // The FFT reports the frequency at the centre of its window; a drifting encounter
+      // frequency is extrapolated from there to now.
+      const double frequency = axis.frequency + axis.frequency_slope * (now_ - axis.frequency_time);
+      const double omega = 2.0 * M_PI * frequency;
       axis.phase = std::fmod(axis.phase + omega * dt, 2.0 * M_PI);
       const double lambda = std::exp(-dt / config_.harmonic_memory);
       const double residual = axis.harmonic.update(axis.phase, compensated, lambda);
@@ -855,6 +913,7 @@ private:
   double smoothed_rate_ = 0.0;
   int hop_samples_ = 1;
   int since_analysis_ = 0;
+  double now_ = 0.0;  ///< time of the sample being processed [s]
 
   bool has_level_ = false;
   bool level_calibrated_ = false;

@@ -51,6 +51,7 @@ FrequencyTracker::FrequencyTracker(int window_samples, double sample_rate)
   if (!(sample_rate > 0.0) || !std::isfinite(sample_rate))
     throw std::invalid_argument("FrequencyTracker: sample rate must be positive");
   ring_.assign(n_, 0.0);
+  times_.assign(n_, 0.0);
   plan_ = std::make_unique<Plan>(n_);
   plan_->power.resize(n_ / 2 + 1);
 }
@@ -59,6 +60,12 @@ FrequencyTracker::~FrequencyTracker() = default;
 
 void FrequencyTracker::push(double value)
 {
+  push(value, count_ > 0 ? times_[(head_ - 1 + n_) % n_] + 1.0 / rate_ : 0.0);
+}
+
+void FrequencyTracker::push(double value, double t)
+{
+  times_[head_] = t;
   ring_[head_] = value;
   head_ = (head_ + 1) % n_;
   ++count_;
@@ -118,13 +125,15 @@ FrequencyEstimate FrequencyTracker::analyse(double f_min, double f_max, double m
   }
   fftw_execute(plan_->plan);
 
+  const double elapsed = times_[(head_ - 1 + n_) % n_] - times_[(head_ - available + n_) % n_];
+  const double rate = elapsed > 0.0 ? (available - 1) / elapsed : rate_;
   const int bins = n_ / 2 + 1;
-  const double df = rate_ / n_;
+  const double df = rate / n_;
   for (int k = 0; k < bins; ++k)
     plan_->power[k] = plan_->out[k][0] * plan_->out[k][0] + plan_->out[k][1] * plan_->out[k][1];
 
   // Search band: never DC (bin 0) nor Nyquist, and a period must fit 3 times in the data.
-  const double span = available / rate_;
+  const double span = available / rate;
   const double f_lo = std::max({ f_min, 3.0 / span, df });
   const int k_lo = std::max(1, static_cast<int>(std::ceil(f_lo / df)));
   const int k_hi = std::min(bins - 2, static_cast<int>(std::floor(f_max / df)));

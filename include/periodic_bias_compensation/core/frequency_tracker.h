@@ -28,6 +28,10 @@ public:
   FrequencyTracker(const FrequencyTracker&) = delete;
   FrequencyTracker& operator=(const FrequencyTracker&) = delete;
 
+  /// Adds a sample taken at time t [s]. Frequencies are scaled by the window's measured mean
+  /// sample rate, so a rate that differs a little from the planned one costs no accuracy.
+  void push(double value, double t);
+  /// Adds a sample at the nominal rate (one period after the previous).
   void push(double value);
   void clear();
   /// True once the window has been filled.
@@ -47,6 +51,7 @@ private:
   int n_;
   double rate_;
   std::vector<double> ring_;
+  std::vector<double> times_;
   int head_ = 0;
   long count_ = 0;
   std::unique_ptr<Plan> plan_;
