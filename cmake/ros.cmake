@@ -26,3 +26,32 @@ install(TARGETS ${PROJECT_NAME}_ros ${PROJECT_NAME}_nodelet compensator_node com
   RUNTIME DESTINATION ${CATKIN_PACKAGE_BIN_DESTINATION})
 install(DIRECTORY include/${PROJECT_NAME}/ros DESTINATION ${CATKIN_PACKAGE_INCLUDE_DESTINATION})
 install(FILES nodelet_plugins.xml DESTINATION ${CATKIN_PACKAGE_SHARE_DESTINATION})
+
+if(CATKIN_ENABLE_TESTING)
+  find_package(rostest REQUIRED)
+  find_package(roslaunch REQUIRED)
+  roslaunch_add_file_check(launch/compensator.launch)
+  roslaunch_add_file_check(launch/compensator.launch use_nodelet:=false)
+  roslaunch_add_file_check(launch/playback.launch bag:=paper_bench.bag)
+  roslaunch_add_file_check(launch/record.launch)
+
+  # Test data: the paper bench scenario simulated at build time (simulate_imu, no master).
+  set(PBC_TEST_DATA_DIR ${CATKIN_DEVEL_PREFIX}/share/${PROJECT_NAME}/test_data)
+  set(PBC_BENCH_BAG ${PBC_TEST_DATA_DIR}/paper_bench.bag)
+  add_custom_command(OUTPUT ${PBC_BENCH_BAG}
+    COMMAND ${CMAKE_COMMAND} -E make_directory ${PBC_TEST_DATA_DIR}
+    COMMAND simulate_imu --scenario ${CMAKE_CURRENT_SOURCE_DIR}/config/scenarios/paper_bench.yaml
+            --out ${PBC_BENCH_BAG}
+    DEPENDS simulate_imu ${CMAKE_CURRENT_SOURCE_DIR}/config/scenarios/paper_bench.yaml
+    COMMENT "Simulating config/scenarios/paper_bench.yaml for the ROS tests")
+  add_custom_target(${PROJECT_NAME}_test_bags DEPENDS ${PBC_BENCH_BAG})
+
+  # Bag regression, node and nodelet (through compensator.launch and playback.launch).
+  add_executable(test_bag_accuracy EXCLUDE_FROM_ALL test/ros/bag_accuracy.cpp)
+  target_link_libraries(test_bag_accuracy ${catkin_LIBRARIES} ${GTEST_LIBRARIES})
+  add_dependencies(tests test_bag_accuracy ${PROJECT_NAME}_test_bags)
+  add_rostest(test/ros/bag_node.test ARGS bag:=${PBC_BENCH_BAG}
+    DEPENDENCIES test_bag_accuracy compensator_node ${PROJECT_NAME}_test_bags)
+  add_rostest(test/ros/bag_nodelet_playback.test ARGS bag:=${PBC_BENCH_BAG}
+    DEPENDENCIES test_bag_accuracy ${PROJECT_NAME}_nodelet ${PROJECT_NAME}_test_bags)
+endif()
