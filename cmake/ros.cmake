@@ -54,4 +54,9 @@ if(CATKIN_ENABLE_TESTING)
     DEPENDENCIES test_bag_accuracy compensator_node ${PROJECT_NAME}_test_bags)
   add_rostest(test/ros/bag_nodelet_playback.test ARGS bag:=${PBC_BENCH_BAG}
     DEPENDENCIES test_bag_accuracy ${PROJECT_NAME}_nodelet ${PROJECT_NAME}_test_bags)
+
+  # Crafted bad input on the real topic, checked on the outputs and /diagnostics.
+  add_rostest_gtest(test_bad_input test/ros/bad_input.test test/ros/bad_input.cpp)
+  target_link_libraries(test_bad_input ${catkin_LIBRARIES})
+  add_dependencies(test_bad_input ${PROJECT_NAME}_generate_messages_cpp)
 endif()
