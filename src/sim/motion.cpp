@@ -11,7 +11,7 @@ namespace periodic_bias_compensation::sim
 namespace
 {
 constexpr double kTwoPi = 2.0 * M_PI;
-constexpr std::int64_t kBlock = 256;  // samples per cached sea block
+constexpr std::int64_t kBlock = 512;  // samples per cached sea block
 
 double wrapAngle(double a)
 {
@@ -255,19 +255,53 @@ void ShipMotion::fillSeaBlock(std::int64_t k0)
   const SlowState slow = slow_.at(t0);
   const Vector3 rel = slow.position - motion_.position;
   const Eigen::Index m = static_cast<Eigen::Index>(components_.size());
-  Eigen::ArrayXd zc(m), zs(m), ec(m), es(m);
-  Eigen::MatrixXd msin = Eigen::MatrixXd::Zero(11, m);
-  Eigen::MatrixXd mcos = Eigen::MatrixXd::Zero(7, m);
+  if (coeff_segment_ != seg)
+  {
+    buildSeaCoefficients(slow);
+    coeff_segment_ = seg;
+  }
+  sin_.resize(m, n);
+  cos_.resize(m, n);
   for (Eigen::Index i = 0; i < m; ++i)
   {
     const WaveComponent& c = components_[i];
     const Vector3 dir(std::cos(c.direction), std::sin(c.direction), 0.0);
     const double th = c.omega * t0 - c.wavenumber * dir.dot(rel) + c.phase;
+    sin_(i, 0) = std::sin(th);
+    cos_(i, 0) = std::cos(th);
+  }
+  for (Eigen::Index j = 1; j < n; ++j)
+  {
+    sin_.col(j).array() = sin_.col(j - 1).array() * step_cos_ + cos_.col(j - 1).array() * step_sin_;
+    cos_.col(j).array() = cos_.col(j - 1).array() * step_cos_ - sin_.col(j - 1).array() * step_sin_;
+  }
+  sin_rows_.noalias() = sin_coeff_ * sin_;
+  cos_rows_.noalias() = cos_coeff_ * cos_;
+  int rs = 0;
+  int rc = 0;
+  for (int j = 0; j < 6; ++j)
+  {
+    const bool cosine = j == kHeave;
+    block_.row(3 * j) = cosine ? cos_rows_.row(rc++) : sin_rows_.row(rs++);
+    block_.row(3 * j + 1) = cosine ? sin_rows_.row(rs++) : cos_rows_.row(rc++);
+    block_.row(3 * j + 2) = cosine ? cos_rows_.row(rc++) : sin_rows_.row(rs++);
+  }
+}
+
+void ShipMotion::buildSeaCoefficients(const SlowState& slow)
+{
+  const Eigen::Index m = static_cast<Eigen::Index>(components_.size());
+  sin_coeff_ = Eigen::MatrixXd::Zero(11, m);
+  cos_coeff_ = Eigen::MatrixXd::Zero(7, m);
+  step_cos_.resize(m);
+  step_sin_.resize(m);
+  for (Eigen::Index i = 0; i < m; ++i)
+  {
+    const WaveComponent& c = components_[i];
+    const Vector3 dir(std::cos(c.direction), std::sin(c.direction), 0.0);
     const double we = c.omega - c.wavenumber * dir.dot(slow.velocity);
-    zc[i] = std::cos(th);
-    zs[i] = std::sin(th);
-    ec[i] = std::cos(we * dt_);
-    es[i] = std::sin(we * dt_);
+    step_cos_[i] = std::cos(we * dt_);
+    step_sin_[i] = std::sin(we * dt_);
     const std::array<Gain, 6> g = gains(motion_.sea, c.wavenumber, c.direction - slow.heading);
     int rs = 0;
     int rc = 0;
@@ -276,37 +310,17 @@ void ShipMotion::fillSeaBlock(std::int64_t k0)
       const double a = c.amplitude * g[j].g0;
       if (g[j].cosine)
       {
-        mcos(rc++, i) = a;
-        msin(rs++, i) = -a * we;
-        mcos(rc++, i) = -a * we * we;
+        cos_coeff_(rc++, i) = a;
+        sin_coeff_(rs++, i) = -a * we;
+        cos_coeff_(rc++, i) = -a * we * we;
       }
       else
       {
-        msin(rs++, i) = a;
-        mcos(rc++, i) = a * we;
-        msin(rs++, i) = -a * we * we;
+        sin_coeff_(rs++, i) = a;
+        cos_coeff_(rc++, i) = a * we;
+        sin_coeff_(rs++, i) = -a * we * we;
       }
     }
-  }
-  Eigen::MatrixXd s(m, n), c(m, n);
-  for (std::int64_t j = 0; j < n; ++j)
-  {
-    s.col(j) = zs.matrix();
-    c.col(j) = zc.matrix();
-    const Eigen::ArrayXd next_c = zc * ec - zs * es;
-    zs = zs * ec + zc * es;
-    zc = next_c;
-  }
-  const Eigen::MatrixXd ps = msin * s;
-  const Eigen::MatrixXd pc = mcos * c;
-  int rs = 0;
-  int rc = 0;
-  for (int j = 0; j < 6; ++j)
-  {
-    const bool cosine = j == kHeave;
-    block_.row(3 * j) = cosine ? pc.row(rc++) : ps.row(rs++);
-    block_.row(3 * j + 1) = cosine ? ps.row(rs++) : pc.row(rc++);
-    block_.row(3 * j + 2) = cosine ? pc.row(rc++) : ps.row(rs++);
   }
 }
 

@@ -110,6 +110,7 @@ private:
   Dofs sinusoidDofs(double elapsed) const;
   Dofs seaDofsDirect(double elapsed, const SlowState& slow) const;
   void fillSeaBlock(std::int64_t k0);
+  void buildSeaCoefficients(const SlowState& slow);
 
   Motion motion_;
   double dt_;
@@ -118,5 +119,16 @@ private:
   std::vector<WaveComponent> components_;
   Eigen::MatrixXd block_;  ///< 18 x n sea DOFs of the cached block
   std::int64_t block_start_ = -1;
+  // Steady-segment fast path: per-component coefficients of the rows that follow sin(theta)
+  // (11) and cos(theta) (7), phasor steps, and the block's phasors and products.
+  std::size_t coeff_segment_ = static_cast<std::size_t>(-1);
+  Eigen::MatrixXd sin_coeff_;
+  Eigen::MatrixXd cos_coeff_;
+  Eigen::ArrayXd step_cos_;
+  Eigen::ArrayXd step_sin_;
+  Eigen::MatrixXd sin_;
+  Eigen::MatrixXd cos_;
+  Eigen::MatrixXd sin_rows_;
+  Eigen::MatrixXd cos_rows_;
 };
 }  // namespace periodic_bias_compensation::sim
