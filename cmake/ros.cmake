@@ -59,4 +59,9 @@ if(CATKIN_ENABLE_TESTING)
   add_rostest_gtest(test_bad_input test/ros/bad_input.test test/ros/bad_input.cpp)
   target_link_libraries(test_bad_input ${catkin_LIBRARIES})
   add_dependencies(test_bad_input ${PROJECT_NAME}_generate_messages_cpp)
+
+  # dynamic_reconfigure (accepted and refused changes) and the calibration services.
+  add_rostest_gtest(test_reconfigure test/ros/reconfigure.test test/ros/reconfigure.cpp)
+  target_link_libraries(test_reconfigure ${catkin_LIBRARIES})
+  add_dependencies(test_reconfigure ${PROJECT_NAME}_generate_messages_cpp ${PROJECT_NAME}_gencfg)
 endif()
