@@ -780,6 +780,32 @@ private:
     }
   }
 
+  /// Appends (y, v) to the axis tables and returns their means over the last `window` samples
+  /// (running sums, O(1) per sample while the window stays the same).
+  static void pushAndAverage(AxisEstimator& axis, double y, double v, int window, double* y_mean, double* v_mean)
+  {
+    axis.y_table.push(y);
+    axis.v_table.push(v);
+    window = std::min(window, axis.y_table.size());
+    if (window != axis.sum_window)
+    {
+      axis.sum_window = window;
+      axis.y_sum = axis.v_sum = 0.0;
+      for (int k = 1; k <= window; ++k)
+      {
+        axis.y_sum += axis.y_table.ago(k);
+        axis.v_sum += axis.v_table.ago(k);
+      }
+    }
+    else
+    {
+      axis.y_sum += y - (axis.y_table.size() > window ? axis.y_table.ago(window + 1) : 0.0);
+      axis.v_sum += v - (axis.v_table.size() > window ? axis.v_table.ago(window + 1) : 0.0);
+    }
+    *y_mean = axis.y_sum / std::max(1, window);
+    *v_mean = axis.v_sum / std::max(1, window);
+  }
+
   /// Default mode: the periodic acceleration is tracked by a harmonic estimator at the tracked
   /// frequency (its displacement is obtained in closed form, drift free); what is left feeds a
   /// third-order observer whose position is pulled to zero mean with time constant
@@ -864,29 +890,8 @@ private:
     }
     axis.paper_v = v;
     axis.paper_y = y;
-    axis.v_table.push(v);
-    axis.y_table.push(y);
-
-    // The corrected y still holds the oscillation: its mean over the last period is the slow
-    // motion, the rest the wave motion.
-    const int window = periodic ? period : 1;
-    if (window != axis.sum_window)
-    {
-      axis.sum_window = std::min(window, axis.y_table.size());
-      axis.y_sum = axis.v_sum = 0.0;
-      for (int k = 1; k <= axis.sum_window; ++k)
-      {
-        axis.y_sum += axis.y_table.ago(k);
-        axis.v_sum += axis.v_table.ago(k);
-      }
-    }
-    else
-    {
-      axis.y_sum += y - (axis.y_table.size() > window ? axis.y_table.ago(window + 1) : 0.0);
-      axis.v_sum += v - (axis.v_table.size() > window ? axis.v_table.ago(window + 1) : 0.0);
-    }
-    const double y_slow = axis.y_sum / std::max(1, axis.sum_window);
-    const double v_slow = axis.v_sum / std::max(1, axis.sum_window);
+    double y_slow = 0.0, v_slow = 0.0;
+    pushAndAverage(axis, y, v, periodic ? period : 1, &y_slow, &v_slow);
     out->position_filtered[i] = y_slow;
     out->velocity_filtered[i] = v_slow;
     out->position_wave[i] = y - y_slow;
