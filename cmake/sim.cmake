@@ -13,6 +13,11 @@ add_executable(simulate_imu src/tools/simulate_imu.cpp)
 target_include_directories(simulate_imu PRIVATE ${catkin_INCLUDE_DIRS})
 target_link_libraries(simulate_imu ${PROJECT_NAME}_sim ${catkin_LIBRARIES})
 
+# Live publisher on simulated time (thin: only calls the sim library).
+add_executable(simulator_node src/ros/simulator_node.cpp)
+target_include_directories(simulator_node PRIVATE ${catkin_INCLUDE_DIRS})
+target_link_libraries(simulator_node ${PROJECT_NAME}_sim ${catkin_LIBRARIES})
+
 if(CATKIN_ENABLE_TESTING)
   catkin_add_gtest(test_sim
     test/sim/main.cpp

@@ -48,6 +48,24 @@ void idealImu(const Truth& truth, double gravity, Vector3* accel, Vector3* gyro)
   *gyro = truth.angular_rate;
 }
 
+TruthOdometry truthOdometry(const Truth& truth)
+{
+  TruthOdometry out;
+  out.total.position = truth.position;
+  out.total.orientation = truth.attitude;
+  out.total.linear_velocity = truth.attitude.conjugate() * truth.velocity;
+  out.total.angular_velocity = truth.angular_rate;
+  out.slow.position = truth.slow_position;
+  out.slow.orientation = Quaternion(Eigen::AngleAxisd(truth.slow_heading, Vector3::UnitZ()));
+  out.slow.linear_velocity = out.slow.orientation.conjugate() * truth.slow_velocity;
+  out.slow.angular_velocity = Vector3(0.0, 0.0, truth.slow_yaw_rate);
+  out.wave.position = truth.wave_position;
+  out.wave.orientation = truth.attitude;
+  out.wave.linear_velocity = truth.attitude.conjugate() * truth.wave_velocity;
+  out.wave.angular_velocity = truth.angular_rate;
+  return out;
+}
+
 namespace
 {
 Scenario completed(const Scenario& scenario)

@@ -125,17 +125,16 @@ geometry_msgs::Point toPoint(const sim::Vector3& v)
   return m;
 }
 
-nav_msgs::Odometry odometry(const ros::Time& stamp, const sim::Vector3& position, const sim::Quaternion& orientation,
-                            const sim::Vector3& velocity_enu, const sim::Vector3& angular_rate)
+nav_msgs::Odometry odometry(const ros::Time& stamp, const sim::OdometryState& state)
 {
   nav_msgs::Odometry m;
   m.header.stamp = stamp;
   m.header.frame_id = "odom";
   m.child_frame_id = "base_link";
-  m.pose.pose.position = toPoint(position);
-  m.pose.pose.orientation = toMsg(orientation);
-  m.twist.twist.linear = toMsg(orientation.conjugate() * velocity_enu);
-  m.twist.twist.angular = toMsg(angular_rate);
+  m.pose.pose.position = toPoint(state.position);
+  m.pose.pose.orientation = toMsg(state.orientation);
+  m.twist.twist.linear = toMsg(state.linear_velocity);
+  m.twist.twist.angular = toMsg(state.angular_velocity);
   return m;
 }
 
@@ -228,7 +227,6 @@ int run(const Options& o)
       continue;
     }
     const ros::Time t(s.t);
-    const sim::Truth& truth = s.truth;
     if (!s.dropped)
     {
       imu.header.stamp = ros::Time(s.stamp);
@@ -244,14 +242,10 @@ int run(const Options& o)
         bag->write("imu/temperature", t, temperature);
       }
     }
-    bag->write("ground_truth/odometry", t,
-               odometry(t, truth.position, truth.attitude, truth.velocity, truth.angular_rate));
-    const sim::Quaternion heading(Eigen::AngleAxisd(truth.slow_heading, sim::Vector3::UnitZ()));
-    bag->write("ground_truth/slow", t,
-               odometry(t, truth.slow_position, heading, truth.slow_velocity,
-                        sim::Vector3(0.0, 0.0, truth.slow_yaw_rate)));
-    bag->write("ground_truth/wave", t,
-               odometry(t, truth.wave_position, truth.attitude, truth.wave_velocity, truth.angular_rate));
+    const sim::TruthOdometry odom = sim::truthOdometry(s.truth);
+    bag->write("ground_truth/odometry", t, odometry(t, odom.total));
+    bag->write("ground_truth/slow", t, odometry(t, odom.slow));
+    bag->write("ground_truth/wave", t, odometry(t, odom.wave));
   }
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   std::cerr << "simulate_imu: " << simulator.sampleCount() << " samples (" << dropped << " dropped), "

@@ -42,6 +42,30 @@ double temperatureAt(const TemperatureProfile& profile, double elapsed);
 /// @param gyro angular rate, body frame [rad/s]
 void idealImu(const Truth& truth, double gravity, Vector3* accel, Vector3* gyro);
 
+/// One truth as nav_msgs/Odometry carries it: pose in ENU (frame odom), twist in the child
+/// frame given by the orientation.
+struct OdometryState
+{
+  Vector3 position = Vector3::Zero();                 ///< ENU [m]
+  Quaternion orientation = Quaternion::Identity();    ///< child -> ENU
+  Vector3 linear_velocity = Vector3::Zero();          ///< child frame [m/s]
+  Vector3 angular_velocity = Vector3::Zero();         ///< child frame [rad/s]
+};
+
+/// The truth as three odometries (ground_truth/odometry, ground_truth/slow,
+/// ground_truth/wave). slow: slow position, heading-only orientation; wave: wave position with
+/// the full attitude; positions add up: total = slow + wave.
+struct TruthOdometry
+{
+  OdometryState total;
+  OdometryState slow;
+  OdometryState wave;
+};
+
+/// Splits a truth into the three published odometries.
+/// @param truth exact motion
+TruthOdometry truthOdometry(const Truth& truth);
+
 /// Produces the samples of a scenario. The same scenario and seed give bit-identical samples.
 class Simulator
 {
