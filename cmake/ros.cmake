@@ -64,4 +64,14 @@ if(CATKIN_ENABLE_TESTING)
   add_rostest_gtest(test_reconfigure test/ros/reconfigure.test test/ros/reconfigure.cpp)
   target_link_libraries(test_reconfigure ${catkin_LIBRARIES})
   add_dependencies(test_reconfigure ${PROJECT_NAME}_generate_messages_cpp ${PROJECT_NAME}_gencfg)
+
+  # compensate_bag end to end on the bench bag and its error paths (no master).
+  catkin_add_gtest(test_compensate_bag test/ros/compensate_bag_test.cpp)
+  target_link_libraries(test_compensate_bag ${catkin_LIBRARIES})
+  target_compile_definitions(test_compensate_bag PRIVATE
+    PBC_COMPENSATE_BAG="$<TARGET_FILE:compensate_bag>"
+    PBC_BENCH_BAG="${PBC_BENCH_BAG}"
+    PBC_SOURCE_DIR="${CMAKE_CURRENT_SOURCE_DIR}")
+  add_dependencies(test_compensate_bag compensate_bag ${PROJECT_NAME}_test_bags
+    ${PROJECT_NAME}_generate_messages_cpp)
 endif()

@@ -1,0 +1,250 @@
+// compensate_bag end to end, without a master: runs the installed-style binary on the simulated
+// paper bench bag and reads the bag it writes; then the error paths (missing input, --out equal
+// to --in, bad parameter files, missing topic): non-zero exit, a message naming the problem,
+// and no output file.
+#include <sys/stat.h>
+
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <map>
+#include <string>
+
+#include <gtest/gtest.h>
+#include <nav_msgs/Odometry.h>
+#include <rosbag/bag.h>
+#include <rosbag/view.h>
+
+#include "periodic_bias_compensation/BiasState.h"
+
+namespace
+{
+struct CommandResult
+{
+  int status = -1;
+  std::string output;  ///< stdout and stderr
+};
+
+CommandResult shell(const std::string& command)
+{
+  CommandResult result;
+  FILE* pipe = popen(command.c_str(), "r");
+  if (pipe == nullptr)
+  {
+    return result;
+  }
+  std::array<char, 512> buffer;
+  while (fgets(buffer.data(), buffer.size(), pipe) != nullptr)
+  {
+    result.output += buffer.data();
+  }
+  const int status = pclose(pipe);
+  result.status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return result;
+}
+
+CommandResult run(const std::string& args)
+{
+  return shell(std::string(PBC_COMPENSATE_BAG) + " " + args + " 2>&1");
+}
+
+bool exists(const std::string& path)
+{
+  struct stat st;
+  return ::stat(path.c_str(), &st) == 0;
+}
+
+class CompensateBag : public testing::Test
+{
+protected:
+  void SetUp() override
+  {
+    char pattern[] = "/tmp/compensate_bag_test.XXXXXX";
+    ASSERT_NE(mkdtemp(pattern), nullptr);
+    dir_ = pattern;
+  }
+  void TearDown() override { std::system(("rm -rf " + dir_).c_str()); }
+  std::string writeFile(const std::string& name, const std::string& content)
+  {
+    const std::string path = dir_ + "/" + name;
+    std::ofstream(path) << content;
+    return path;
+  }
+  /// No output and no leftover temporary file in the directory.
+  void expectNothingWritten(const std::string& out)
+  {
+    EXPECT_FALSE(exists(out)) << out << " was created";
+    const CommandResult ls = shell("ls " + dir_ + " | grep partial");
+    EXPECT_TRUE(ls.output.empty()) << "temporary file left: " << ls.output;
+  }
+  std::string dir_;
+};
+
+using Positions = std::map<std::int64_t, std::array<double, 3>>;
+}  // namespace
+
+TEST_F(CompensateBag, BenchBagEndToEnd)
+{
+  const std::string out = dir_ + "/out.bag";
+  const CommandResult r = run(std::string("--in ") + PBC_BENCH_BAG + " --out " + out);
+  ASSERT_EQ(r.status, 0) << r.output;
+
+  rosbag::Bag bag(out, rosbag::bagmode::Read);
+  std::map<std::string, Positions> tracks;
+  std::size_t bias_states = 0;
+  std::size_t nonfinite = 0;
+  for (const rosbag::MessageInstance& m : rosbag::View(bag))
+  {
+    std::string topic = m.getTopic();
+    if (!topic.empty() && topic.front() == '/')
+    {
+      topic.erase(0, 1);
+    }
+    if (const auto odom = m.instantiate<nav_msgs::Odometry>())
+    {
+      const auto& p = odom->pose.pose.position;
+      if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
+      {
+        ++nonfinite;
+      }
+      tracks[topic][static_cast<std::int64_t>(odom->header.stamp.toNSec())] = { p.x, p.y, p.z };
+    }
+    else if (const auto bias = m.instantiate<periodic_bias_compensation::BiasState>())
+    {
+      ++bias_states;
+      EXPECT_EQ(bias->mode, "default");
+    }
+  }
+  EXPECT_EQ(nonfinite, 0u);
+  const Positions& filtered = tracks["odometry/filtered"];
+  const Positions& wave = tracks["odometry/wave"];
+  const Positions& slow_truth = tracks["ground_truth/slow"];
+  const Positions& wave_truth = tracks["ground_truth/wave"];
+  ASSERT_FALSE(slow_truth.empty()) << "ground_truth/slow not copied";
+  ASSERT_FALSE(wave_truth.empty()) << "ground_truth/wave not copied";
+  EXPECT_FALSE(tracks["ground_truth/odometry"].empty()) << "ground_truth/odometry not copied";
+  EXPECT_EQ(filtered.size(), slow_truth.size()) << "one output per IMU message expected";
+  EXPECT_EQ(wave.size(), slow_truth.size());
+  EXPECT_EQ(bias_states, slow_truth.size());
+
+  // Same accuracy targets as the node (bag_accuracy.cpp): 0.06 m, 10 % wave RMS after 20 s.
+  ASSERT_FALSE(filtered.empty());
+  const auto& [stamp, p] = *filtered.rbegin();
+  const auto& truth = slow_truth.at(stamp);
+  const double final_error = std::hypot(p[0] - truth[0], p[1] - truth[1], p[2] - truth[2]);
+  const double t0 = slow_truth.begin()->first * 1e-9;
+  double err2 = 0.0;
+  double truth2 = 0.0;
+  for (const auto& [s, w] : wave)
+  {
+    if (s * 1e-9 - t0 < 20.0)
+    {
+      continue;
+    }
+    const auto& g = wave_truth.at(s);
+    err2 += std::pow(w[0] - g[0], 2) + std::pow(w[1] - g[1], 2) + std::pow(w[2] - g[2], 2);
+    truth2 += g[0] * g[0] + g[1] * g[1] + g[2] * g[2];
+  }
+  const double fraction = std::sqrt(err2 / truth2);
+  std::printf("[compensate_bag] final filtered position error %.4f m, wave RMS error %.1f %% of truth RMS\n",
+              final_error, 100.0 * fraction);
+  EXPECT_LT(final_error, 0.06);
+  EXPECT_LT(fraction, 0.10);
+}
+
+TEST_F(CompensateBag, ModeAndParameterFile)
+{
+  const std::string out = dir_ + "/paper.bag";
+  const CommandResult r = run(std::string("--in ") + PBC_BENCH_BAG + " --out " + out + " --mode paper --params " +
+                    PBC_SOURCE_DIR + "/config/compensator.yaml");
+  ASSERT_EQ(r.status, 0) << r.output;
+  rosbag::Bag bag(out, rosbag::bagmode::Read);
+  std::size_t n = 0;
+  for (const rosbag::MessageInstance& m : rosbag::View(bag, rosbag::TopicQuery("/bias_state")))
+  {
+    const auto bias = m.instantiate<periodic_bias_compensation::BiasState>();
+    ASSERT_TRUE(bias);
+    EXPECT_EQ(bias->mode, "paper");
+    ++n;
+  }
+  EXPECT_GT(n, 0u);
+}
+
+TEST_F(CompensateBag, MissingInputFails)
+{
+  const std::string out = dir_ + "/out.bag";
+  const CommandResult r = run("--in " + dir_ + "/no_such.bag --out " + out);
+  EXPECT_NE(r.status, 0);
+  EXPECT_NE(r.output.find("no_such.bag"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("does not exist"), std::string::npos) << r.output;
+  expectNothingWritten(out);
+}
+
+TEST_F(CompensateBag, NeverOverwritesInput)
+{
+  const std::string in = dir_ + "/in.bag";
+  ASSERT_EQ(std::system((std::string("cp ") + PBC_BENCH_BAG + " " + in).c_str()), 0);
+  struct stat before;
+  ASSERT_EQ(::stat(in.c_str(), &before), 0);
+  const CommandResult r = run("--in " + in + " --out " + dir_ + "/./in.bag");
+  EXPECT_NE(r.status, 0);
+  EXPECT_NE(r.output.find("overwritten"), std::string::npos) << r.output;
+  struct stat after;
+  ASSERT_EQ(::stat(in.c_str(), &after), 0);
+  EXPECT_EQ(before.st_size, after.st_size);
+  EXPECT_EQ(before.st_mtime, after.st_mtime);
+}
+
+TEST_F(CompensateBag, BadParameterFilesNameTheKey)
+{
+  const std::string out = dir_ + "/out.bag";
+  const std::string unknown = writeFile("unknown.yaml", "alpha_v_x: 0.4\nalpah_p_x: 0.3\n");
+  CommandResult r = run(std::string("--in ") + PBC_BENCH_BAG + " --out " + out + " --params " + unknown);
+  EXPECT_NE(r.status, 0);
+  EXPECT_NE(r.output.find("alpah_p_x"), std::string::npos) << r.output;
+  expectNothingWritten(out);
+
+  const std::string type = writeFile("type.yaml", "fft_window: long\n");
+  r = run(std::string("--in ") + PBC_BENCH_BAG + " --out " + out + " --params " + type);
+  EXPECT_NE(r.status, 0);
+  EXPECT_NE(r.output.find("fft_window"), std::string::npos) << r.output;
+  expectNothingWritten(out);
+
+  const std::string unstable = writeFile("unstable.yaml", "beta_v_x: 40.0\n");
+  r = run(std::string("--in ") + PBC_BENCH_BAG + " --out " + out + " --params " + unstable);
+  EXPECT_NE(r.status, 0);
+  EXPECT_NE(r.output.find("beta_v_x"), std::string::npos) << r.output;
+  expectNothingWritten(out);
+
+  r = run(std::string("--in ") + PBC_BENCH_BAG + " --out " + out + " --params " + dir_ + "/absent.yaml");
+  EXPECT_NE(r.status, 0);
+  EXPECT_NE(r.output.find("absent.yaml"), std::string::npos) << r.output;
+  expectNothingWritten(out);
+}
+
+TEST_F(CompensateBag, MissingTopicAndBadArguments)
+{
+  const std::string out = dir_ + "/out.bag";
+  CommandResult r = run(std::string("--in ") + PBC_BENCH_BAG + " --out " + out + " --imu-topic imu/raw");
+  EXPECT_NE(r.status, 0);
+  EXPECT_NE(r.output.find("imu/raw"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("imu/data"), std::string::npos) << "the topics present should be listed: " << r.output;
+  expectNothingWritten(out);
+
+  r = run(std::string("--in ") + PBC_BENCH_BAG + " --out " + out + " --mode fast");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.output.find("--mode"), std::string::npos) << r.output;
+  expectNothingWritten(out);
+
+  r = run("--in " + std::string(PBC_BENCH_BAG));
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.output.find("usage"), std::string::npos) << r.output;
+}
+
+int main(int argc, char** argv)
+{
+  testing::InitGoogleTest(&argc, argv);
+  return RUN_ALL_TESTS();
+}
