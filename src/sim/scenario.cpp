@@ -529,7 +529,7 @@ Scenario loadScenario(const std::string& path)
 
 std::int64_t sampleCount(const Scenario& scenario)
 {
-  return static_cast<std::int64_t>(std::ceil(scenario.duration * scenario.rate - 1e-9));
+  return static_cast<std::int64_t>(std::ceil(scenario.duration * scenario.rate - 1e-6));
 }
 
 EffectSpec* findEffect(Scenario& scenario, const std::string& name)

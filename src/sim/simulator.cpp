@@ -118,11 +118,9 @@ bool Simulator::next(Sample* sample)
 
   EffectInput in;
   in.elapsed = s.elapsed;
-  in.dt = 1.0 / scenario_.rate;
   in.truth = &s.truth;
   in.temperature = s.temperature;
   in.has_temperature = s.has_temperature;
-  in.gravity = scenario_.gravity;
   ImuOutput out;
   idealImu(s.truth, scenario_.gravity, &out.accel, &out.gyro);
   out.orientation = s.truth.attitude;

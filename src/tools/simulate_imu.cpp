@@ -34,8 +34,10 @@ struct Options
   std::string csv;
   bool has_seed = false;
   std::uint64_t seed = 0;
-  double duration = -1.0;
-  double start_time = -1.0;
+  bool has_duration = false;
+  double duration = 0.0;
+  bool has_start_time = false;
+  double start_time = 0.0;
   bool list_effects = false;
 };
 
@@ -64,9 +66,15 @@ Options parseOptions(int argc, char** argv)
       o.has_seed = true;
     }
     else if (arg == "--duration")
+    {
       o.duration = std::stod(value());
+      o.has_duration = true;
+    }
     else if (arg == "--start-time")
+    {
       o.start_time = std::stod(value());
+      o.has_start_time = true;
+    }
     else if (arg == "--list-effects")
       o.list_effects = true;
     else if (arg == "--help" || arg == "-h")
@@ -172,11 +180,11 @@ void writeCsvRow(std::ostream& out, const sim::Sample& s)
 int run(const Options& o)
 {
   sim::Scenario scenario = sim::loadScenario(o.scenario);
-  if (o.duration > 0.0)
+  if (o.has_duration)
   {
     scenario.duration = o.duration;
   }
-  if (o.start_time > 0.0)
+  if (o.has_start_time)
   {
     scenario.start_time = o.start_time;
   }

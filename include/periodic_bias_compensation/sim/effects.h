@@ -56,12 +56,10 @@ EffectSpec completeEffect(const EffectSpec& spec, const std::string& where = "ef
 /// What an effect sees of the sample being produced.
 struct EffectInput
 {
-  double elapsed = 0.0;  ///< true time since start [s]
-  double dt = 0.0;       ///< sample period [s]
-  const Truth* truth = nullptr;
-  double temperature = 0.0;  ///< [degC]
+  double elapsed = 0.0;           ///< true time since start [s]
+  const Truth* truth = nullptr;   ///< exact motion of base_link
+  double temperature = 0.0;       ///< [degC]
   bool has_temperature = false;
-  double gravity = kStandardGravity;  ///< [m/s^2]
 };
 
 /// What effects modify.
