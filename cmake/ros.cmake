@@ -60,6 +60,10 @@ if(CATKIN_ENABLE_TESTING)
   target_link_libraries(test_bad_input ${catkin_LIBRARIES})
   add_dependencies(test_bad_input ${PROJECT_NAME}_generate_messages_cpp)
 
+  # Invalid start-up parameters stop the node and the nodelet.
+  add_rostest_gtest(test_bad_params test/ros/bad_params.test test/ros/bad_params.cpp)
+  target_link_libraries(test_bad_params ${catkin_LIBRARIES})
+
   # dynamic_reconfigure (accepted and refused changes) and the calibration services.
   add_rostest_gtest(test_reconfigure test/ros/reconfigure.test test/ros/reconfigure.cpp)
   target_link_libraries(test_reconfigure ${catkin_LIBRARIES})

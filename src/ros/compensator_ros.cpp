@@ -312,6 +312,8 @@ void CompensatorRos::publishOutputs(const sensor_msgs::Imu& msg, const Compensat
   }
   has_output_ = true;
   last_output_ = out;
+  // Raw track: acceleration_level is the core's gravity-free level acceleration with its
+  // constant-bias estimate removed (CompensatorOutput), integrated twice here.
   raw_.add(out.t, out.acceleration_level, status == SampleStatus::kGapReset);
   appendPaths(stamp, out);
 }

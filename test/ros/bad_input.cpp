@@ -2,7 +2,10 @@
 // non-unit quaternions, wrong frame_id, duplicated stamps, stamps going backwards, a gap, a
 // changed sample rate, no orientation). Asserts that nothing non-finite is ever published, that
 // /diagnostics counts every case, and that valid output keeps coming afterwards.
-// Private parameter: record_path, a bag that launch/record.launch must be writing.
+// Also checks the optional outputs: TF odom -> base_link, path/filtered and path/raw bounded by
+// path_max_length.
+// Private parameters: record_path, a bag that launch/record.launch must be writing;
+// path_max_length, as given to the compensator.
 #include <cmath>
 #include <fstream>
 #include <map>
@@ -12,7 +15,9 @@
 #include <diagnostic_msgs/DiagnosticArray.h>
 #include <gtest/gtest.h>
 #include <nav_msgs/Odometry.h>
+#include <nav_msgs/Path.h>
 #include <ros/ros.h>
+#include <tf2_msgs/TFMessage.h>
 #include <sensor_msgs/Imu.h>
 
 #include "periodic_bias_compensation/BiasState.h"
@@ -43,6 +48,60 @@ public:
     wave_ = nh.subscribe("odometry/wave", 5000, &Observer::odometry, this);
     bias_ = nh.subscribe("bias_state", 5000, &Observer::bias, this);
     diagnostics_ = nh.subscribe("/diagnostics", 100, &Observer::diagnostics, this);
+    tf_ = nh.subscribe("/tf", 5000, &Observer::tf, this);
+    path_filtered_ = nh.subscribe("path/filtered", 100, &Observer::path, this);
+    path_raw_ = nh.subscribe("path/raw", 100, &Observer::path, this);
+  }
+
+  void tf(const tf2_msgs::TFMessage::ConstPtr& msg)
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    for (const auto& t : msg->transforms)
+    {
+      if (t.header.frame_id == "odom" && t.child_frame_id == "base_link")
+      {
+        ++tf_count_;
+        const auto& r = t.transform.rotation;
+        const std::array<double, 7> v = { t.transform.translation.x, t.transform.translation.y,
+                                          t.transform.translation.z, r.w, r.x, r.y, r.z };
+        if (!finiteRange(v))
+        {
+          ++nonfinite_;
+        }
+      }
+    }
+  }
+
+  void path(const nav_msgs::Path::ConstPtr& msg)
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    ++path_count_;
+    max_path_length_ = std::max(max_path_length_, msg->poses.size());
+    for (const auto& pose : msg->poses)
+    {
+      const auto& p = pose.pose.position;
+      const std::array<double, 3> v = { p.x, p.y, p.z };
+      if (!finiteRange(v))
+      {
+        ++nonfinite_;
+      }
+    }
+  }
+
+  std::size_t tfCount()
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return tf_count_;
+  }
+  std::size_t pathCount()
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return path_count_;
+  }
+  std::size_t maxPathLength()
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return max_path_length_;
   }
 
   void odometry(const nav_msgs::Odometry::ConstPtr& msg)
@@ -134,7 +193,10 @@ public:
 
 private:
   std::mutex mutex_;
-  ros::Subscriber filtered_, wave_, bias_, diagnostics_;
+  ros::Subscriber filtered_, wave_, bias_, diagnostics_, tf_, path_filtered_, path_raw_;
+  std::size_t tf_count_ = 0;
+  std::size_t path_count_ = 0;
+  std::size_t max_path_length_ = 0;
   std::size_t nonfinite_ = 0;
   std::size_t negative_variance_ = 0;
   std::size_t odometry_count_ = 0;
@@ -300,6 +362,11 @@ TEST(BadInput, EveryCaseCountedNothingNonFinitePublished)
   EXPECT_GT(observer.value("dropped waiting for mounting"), 0);
   EXPECT_EQ(observer.values()["mounting"], "identity (tf lookup failed)");
   EXPECT_EQ(observer.values()["input frame"], "imu_link");
+
+  // publish_tf, path/filtered and path/raw (bounded by path_max_length) are set in the .test.
+  EXPECT_GT(observer.tfCount(), 0u) << "no odom -> base_link on /tf";
+  EXPECT_GT(observer.pathCount(), 0u) << "no path/filtered or path/raw";
+  EXPECT_LE(observer.maxPathLength(), static_cast<std::size_t>(pnh.param("path_max_length", 5)));
 
   // The bad input was reported at WARN level with a readable message at least once.
   const auto levels = observer.levels();
