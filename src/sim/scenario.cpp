@@ -1,5 +1,6 @@
 #include "periodic_bias_compensation/sim/scenario.h"
 
+#include <charconv>
 #include <cmath>
 #include <fstream>
 #include <set>
@@ -167,6 +168,14 @@ void check(const std::string& key, double value, double lo, double hi, const std
        << "] " << unit;
     throw std::runtime_error(os.str());
   }
+}
+
+// Shortest decimal text that reads back to the same double.
+std::string shortest(double x)
+{
+  std::array<char, 32> buffer{};
+  const auto result = std::to_chars(buffer.data(), buffer.data() + buffer.size(), x);
+  return std::string(buffer.data(), result.ptr);
 }
 
 MotionType motionType(const std::string& name, const std::string& key)
@@ -495,6 +504,122 @@ void validateScenario(const Scenario& s)
       throw std::runtime_error("key '" + where + "' (thermal_drift): needs a 'temperature' profile");
     }
   }
+}
+
+std::string toYaml(const Scenario& s)
+{
+  YAML::Emitter out;
+  const auto seq = [&out](const std::vector<double>& v) {
+    out << YAML::Flow << YAML::BeginSeq;
+    for (const double x : v)
+    {
+      out << shortest(x);
+    }
+    out << YAML::EndSeq;
+  };
+  out << YAML::BeginMap;
+  out << YAML::Key << "name" << YAML::Value << s.name;
+  out << YAML::Key << "description" << YAML::Value << s.description;
+  out << YAML::Key << "rate" << YAML::Value << shortest(s.rate);
+  out << YAML::Key << "duration" << YAML::Value << shortest(s.duration);
+  out << YAML::Key << "start_time" << YAML::Value << shortest(s.start_time);
+  out << YAML::Key << "seed" << YAML::Value << s.seed;
+  out << YAML::Key << "gravity" << YAML::Value << shortest(s.gravity);
+  out << YAML::Key << "orientation_stddev" << YAML::Value << shortest(s.orientation_stddev);
+
+  const Motion& m = s.motion;
+  out << YAML::Key << "motion" << YAML::Value << YAML::BeginMap;
+  out << YAML::Key << "type" << YAML::Value << toString(m.type);
+  out << YAML::Key << "position" << YAML::Value;
+  seq({ m.position.x(), m.position.y(), m.position.z() });
+  out << YAML::Key << "heading" << YAML::Value << shortest(m.heading);
+  out << YAML::Key << "roll" << YAML::Value << shortest(m.roll);
+  out << YAML::Key << "pitch" << YAML::Value << shortest(m.pitch);
+  if (m.type != MotionType::kStatic)
+  {
+    out << YAML::Key << "speed" << YAML::Value << shortest(m.speed);
+  }
+  if (m.type == MotionType::kSinusoids)
+  {
+    out << YAML::Key << "sinusoids" << YAML::Value << YAML::BeginMap;
+    for (int j = 0; j < 6; ++j)
+    {
+      out << YAML::Key << dofNames()[j] << YAML::Value << YAML::Flow << YAML::BeginMap;
+      out << YAML::Key << "amplitude" << YAML::Value << shortest(m.sinusoids[j].amplitude);
+      out << YAML::Key << "frequency" << YAML::Value << shortest(m.sinusoids[j].frequency);
+      out << YAML::Key << "phase" << YAML::Value << shortest(m.sinusoids[j].phase);
+      out << YAML::EndMap;
+    }
+    out << YAML::EndMap;
+  }
+  if (m.type == MotionType::kSea || m.type == MotionType::kRoute)
+  {
+    out << YAML::Key << "sea" << YAML::Value << YAML::BeginMap;
+    out << YAML::Key << "components" << YAML::Value << m.sea.components;
+    out << YAML::Key << "length" << YAML::Value << shortest(m.sea.length);
+    out << YAML::Key << "response" << YAML::Value << YAML::Flow << YAML::BeginMap;
+    for (int j = 0; j < 6; ++j)
+    {
+      out << YAML::Key << dofNames()[j] << YAML::Value << shortest(m.sea.response[j]);
+    }
+    out << YAML::EndMap;
+    out << YAML::Key << "systems" << YAML::Value << YAML::BeginSeq;
+    for (const WaveSystem& w : m.sea.systems)
+    {
+      out << YAML::Flow << YAML::BeginMap;
+      out << YAML::Key << "spectrum" << YAML::Value << w.spectrum;
+      out << YAML::Key << "significant_height" << YAML::Value << shortest(w.significant_height);
+      out << YAML::Key << "peak_period" << YAML::Value << shortest(w.peak_period);
+      out << YAML::Key << "gamma" << YAML::Value << shortest(w.gamma);
+      out << YAML::Key << "direction" << YAML::Value << shortest(w.direction);
+      out << YAML::Key << "spreading" << YAML::Value << shortest(w.spreading);
+      out << YAML::EndMap;
+    }
+    out << YAML::EndSeq << YAML::EndMap;
+  }
+  if (m.type == MotionType::kRoute)
+  {
+    out << YAML::Key << "route" << YAML::Value << YAML::BeginMap;
+    out << YAML::Key << "turn_rate" << YAML::Value << shortest(m.route.turn_rate);
+    out << YAML::Key << "acceleration" << YAML::Value << shortest(m.route.acceleration);
+    out << YAML::Key << "legs" << YAML::Value << YAML::BeginSeq;
+    for (const RouteLeg& leg : m.route.legs)
+    {
+      out << YAML::Flow << YAML::BeginMap;
+      out << YAML::Key << "heading" << YAML::Value << shortest(leg.heading);
+      out << YAML::Key << "speed" << YAML::Value << shortest(leg.speed);
+      out << YAML::Key << "duration" << YAML::Value << shortest(leg.duration);
+      out << YAML::EndMap;
+    }
+    out << YAML::EndSeq << YAML::EndMap;
+  }
+  out << YAML::EndMap;
+
+  if (s.temperature.enabled)
+  {
+    out << YAML::Key << "temperature" << YAML::Value << YAML::BeginMap;
+    out << YAML::Key << "mean" << YAML::Value << shortest(s.temperature.mean);
+    out << YAML::Key << "amplitude" << YAML::Value << shortest(s.temperature.amplitude);
+    out << YAML::Key << "period" << YAML::Value << shortest(s.temperature.period);
+    out << YAML::Key << "phase" << YAML::Value << shortest(s.temperature.phase);
+    out << YAML::EndMap;
+  }
+  out << YAML::Key << "effects" << YAML::Value << YAML::BeginSeq;
+  for (const EffectSpec& e : s.effects)
+  {
+    out << YAML::BeginMap;
+    out << YAML::Key << "name" << YAML::Value << e.name;
+    out << YAML::Key << "enabled" << YAML::Value << e.enabled;
+    for (const auto& [key, values] : e.params)
+    {
+      out << YAML::Key << key << YAML::Value;
+      seq(values);
+    }
+    out << YAML::EndMap;
+  }
+  out << YAML::EndSeq;
+  out << YAML::EndMap;
+  return std::string(out.c_str()) + "\n";
 }
 
 Scenario parseScenario(const std::string& text, const std::string& origin)

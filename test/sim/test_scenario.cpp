@@ -5,6 +5,7 @@
 
 #include "periodic_bias_compensation/sim/effects.h"
 #include "periodic_bias_compensation/sim/scenario.h"
+#include "periodic_bias_compensation/sim/simulator.h"
 
 namespace sim = periodic_bias_compensation::sim;
 
@@ -128,4 +129,46 @@ TEST(Scenario, VocabularyHasEveryEffectWithUnits)
       EXPECT_FALSE(p.unit.empty()) << n << "." << p.name;
     }
   }
+}
+
+TEST(Scenario, YamlRoundTripGivesTheSameSamples)
+{
+  for (const char* file : { "paper_bench", "underway_course_changes", "thermal_day_night", "swell_and_wind_sea" })
+  {
+    SCOPED_TRACE(file);
+    sim::Scenario a = sim::loadScenario(std::string(PBC_SCENARIO_DIR) + "/" + file + ".yaml");
+    a.duration = 3.0;
+    a.effects.push_back(sim::defaultEffect("vibration"));
+    a.effects.back().params["frequency"] = { 1.0 / 3.0 };
+    a.effects.back().params["accel_amplitude"] = { 0.1, 0.2, 0.3 };
+    a.effects.back().enabled = false;
+    const std::string yaml = sim::toYaml(a);
+    const sim::Scenario b = sim::parseScenario(yaml, "round trip");
+    EXPECT_EQ(sim::toYaml(b), yaml);
+    EXPECT_FALSE(b.effects.back().enabled);
+    sim::Simulator sa(a, 11);
+    sim::Simulator sb(b, 11);
+    sim::Sample x;
+    sim::Sample y;
+    while (sa.next(&x))
+    {
+      ASSERT_TRUE(sb.next(&y));
+      ASSERT_EQ(x.accel, y.accel);
+      ASSERT_EQ(x.gyro, y.gyro);
+      ASSERT_EQ(x.truth.position, y.truth.position);
+    }
+    EXPECT_FALSE(sb.next(&y));
+  }
+}
+
+TEST(Scenario, YamlRoundTripOfDefaultsAndSpecialText)
+{
+  sim::Scenario a;
+  a.description = "quotes \" and: colons, # hashes";
+  a.temperature.enabled = true;
+  const sim::Scenario b = sim::parseScenario(sim::toYaml(a), "round trip");
+  EXPECT_EQ(b.name, "");
+  EXPECT_EQ(b.description, a.description);
+  EXPECT_TRUE(b.temperature.enabled);
+  EXPECT_EQ(sim::toYaml(b), sim::toYaml(a));
 }

@@ -148,6 +148,11 @@ Scenario loadScenario(const std::string& path);
 /// @throws std::runtime_error naming the offending key
 Scenario parseScenario(const std::string& text, const std::string& origin = "<string>");
 
+/// Writes a scenario as YAML that parseScenario() reads back to the same scenario (every key
+/// written, numbers with 17 significant digits). Useful to save a scenario built or fitted in code.
+/// @param scenario scenario
+std::string toYaml(const Scenario& scenario);
+
 /// Checks ranges and effect parameters of a scenario built in code.
 /// @throws std::runtime_error naming the offending field
 void validateScenario(const Scenario& scenario);
