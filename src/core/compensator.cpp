@@ -824,7 +824,9 @@ private:
       const double residual = axis.harmonic.update(axis.phase, compensated, lambda);
       const double beta = 1.0 - lambda;
       axis.residual_variance = (1.0 - beta) * axis.residual_variance + beta * residual * residual;
-      axis.harmonic.evaluate(axis.phase, omega, &wave_a, &wave_x, &wave_v, &variance_factor);
+      // A fit of less than one period is not yet a description of the oscillation.
+      if (axis.harmonic.updates() >= rate_ / frequency)
+        axis.harmonic.evaluate(axis.phase, omega, &wave_a, &wave_x, &wave_v, &variance_factor);
     }
     else if (dt > 0.0)
     {
