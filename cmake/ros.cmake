@@ -69,6 +69,11 @@ if(CATKIN_ENABLE_TESTING)
   target_link_libraries(test_reconfigure ${catkin_LIBRARIES})
   add_dependencies(test_reconfigure ${PROJECT_NAME}_generate_messages_cpp ${PROJECT_NAME}_gencfg)
 
+  # Conversions, parameter table and raw integration, no master.
+  catkin_add_gtest(test_ros_conversions test/ros/conversions_test.cpp)
+  target_link_libraries(test_ros_conversions ${PROJECT_NAME}_ros ${catkin_LIBRARIES})
+  target_compile_definitions(test_ros_conversions PRIVATE PBC_SOURCE_DIR="${CMAKE_CURRENT_SOURCE_DIR}")
+
   # compensate_bag end to end on the bench bag and its error paths (no master).
   catkin_add_gtest(test_compensate_bag test/ros/compensate_bag_test.cpp)
   target_link_libraries(test_compensate_bag ${catkin_LIBRARIES})

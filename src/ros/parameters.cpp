@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
-#include <sstream>
 #include <stdexcept>
 
 namespace periodic_bias_compensation
@@ -144,16 +143,6 @@ bool RosOptions::validate(std::string* why) const
     return fail("parameter 'diagnostic_period': must be > 0 s");
   }
   return true;
-}
-
-std::vector<std::string> knownParameterKeys()
-{
-  std::vector<std::string> keys;
-  for (const Key& k : keyTable())
-  {
-    keys.push_back(k.name);
-  }
-  return keys;
 }
 
 bool readParameters(const ParameterSource& source, Parameters* params, std::string* why)

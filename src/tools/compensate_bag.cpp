@@ -127,14 +127,26 @@ public:
   BagCompensator(const Options& options, const Parameters& params)
     : options_(options), params_(params), compensator_(params.core), frame_filter_(params.ros.imu_frame)
   {
-    if (!params_.ros.calibration_file.empty())
+    // Same rule as the node: an existing file is loaded (and must be valid), a missing one
+    // means calibrating from the data.
+    const std::string& file = params_.ros.calibration_file;
+    if (!file.empty() && fs::exists(file))
     {
       Vector3 bias;
       std::string why;
-      if (!loadCalibration(params_.ros.calibration_file, &bias, &why) || !compensator_.setConstantBias(bias))
+      if (!loadCalibration(file, &bias, &why))
       {
         throw std::runtime_error("parameter 'calibration_file': " + why);
       }
+      if (!compensator_.setConstantBias(bias))
+      {
+        throw std::runtime_error("parameter 'calibration_file': '" + file + "' holds a non-finite constant bias");
+      }
+    }
+    else if (!file.empty())
+    {
+      std::fprintf(stderr, "compensate_bag: calibration file %s does not exist: calibrating from the data\n",
+                   file.c_str());
     }
   }
 

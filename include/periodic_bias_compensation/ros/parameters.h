@@ -57,9 +57,6 @@ public:
 /// false with a message naming the key; *params is then unspecified.
 bool readParameters(const ParameterSource& source, Parameters* params, std::string* why);
 
-/// Every key readParameters() knows.
-std::vector<std::string> knownParameterKeys();
-
 /// The private namespace of a node or nodelet on the parameter server.
 class RosParameterSource : public ParameterSource
 {

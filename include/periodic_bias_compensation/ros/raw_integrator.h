@@ -18,7 +18,6 @@ public:
   /// Back to zero position and velocity (stamps went backwards).
   void reset();
   const Vector3& position() const { return position_; }  ///< [m]
-  const Vector3& velocity() const { return velocity_; }  ///< [m/s]
 
 private:
   bool started_ = false;
