@@ -67,6 +67,7 @@ struct TruthOdometry
 TruthOdometry truthOdometry(const Truth& truth);
 
 /// Produces the samples of a scenario. The same scenario and seed give bit-identical samples.
+/// Threading: a Simulator is not thread-safe; use one per thread (they share nothing).
 class Simulator
 {
 public:
