@@ -2,7 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
+#include <functional>
+#include <map>
 #include <sstream>
 #include <stdexcept>
 
@@ -583,37 +584,32 @@ EffectSpec completeEffect(const EffectSpec& spec, const std::string& where)
 
 std::unique_ptr<Effect> makeEffect(const EffectSpec& spec, std::uint64_t seed, double rate)
 {
-  const std::string& n = spec.name;
-  if (n == "lever_arm")
-    return std::make_unique<LeverArm>(spec);
-  if (n == "misalignment")
-    return std::make_unique<Misalignment>(spec);
-  if (n == "scale_factor")
-    return std::make_unique<ScaleFactor>(spec);
-  if (n == "constant_bias")
-    return std::make_unique<ConstantBias>(spec);
-  if (n == "periodic_bias")
-    return std::make_unique<PeriodicBias>(spec);
-  if (n == "thermal_drift")
-    return std::make_unique<ThermalDrift>(spec);
-  if (n == "bias_random_walk")
-    return std::make_unique<BiasRandomWalk>(spec, seed, rate);
-  if (n == "bias_instability")
-    return std::make_unique<BiasInstability>(spec, seed, rate);
-  if (n == "vibration")
-    return std::make_unique<Vibration>(spec);
-  if (n == "white_noise")
-    return std::make_unique<WhiteNoise>(spec, seed, rate);
-  if (n == "saturation")
-    return std::make_unique<Saturation>(spec);
-  if (n == "quantization")
-    return std::make_unique<Quantization>(spec);
-  if (n == "gravity_leakage")
-    return std::make_unique<GravityLeakage>(spec);
-  if (n == "timestamp_jitter")
-    return std::make_unique<TimestampJitter>(spec, seed);
-  if (n == "dropouts")
-    return std::make_unique<Dropouts>(spec, seed);
-  throw std::runtime_error("unknown effect '" + n + "'");
+  using Factory = std::function<std::unique_ptr<Effect>(const EffectSpec&, std::uint64_t, double)>;
+  static const std::map<std::string, Factory> factories = {
+    { "lever_arm", [](const EffectSpec& e, std::uint64_t, double) { return std::make_unique<LeverArm>(e); } },
+    { "misalignment", [](const EffectSpec& e, std::uint64_t, double) { return std::make_unique<Misalignment>(e); } },
+    { "scale_factor", [](const EffectSpec& e, std::uint64_t, double) { return std::make_unique<ScaleFactor>(e); } },
+    { "constant_bias", [](const EffectSpec& e, std::uint64_t, double) { return std::make_unique<ConstantBias>(e); } },
+    { "periodic_bias", [](const EffectSpec& e, std::uint64_t, double) { return std::make_unique<PeriodicBias>(e); } },
+    { "thermal_drift", [](const EffectSpec& e, std::uint64_t, double) { return std::make_unique<ThermalDrift>(e); } },
+    { "bias_random_walk",
+      [](const EffectSpec& e, std::uint64_t s, double r) { return std::make_unique<BiasRandomWalk>(e, s, r); } },
+    { "bias_instability",
+      [](const EffectSpec& e, std::uint64_t s, double r) { return std::make_unique<BiasInstability>(e, s, r); } },
+    { "vibration", [](const EffectSpec& e, std::uint64_t, double) { return std::make_unique<Vibration>(e); } },
+    { "white_noise", [](const EffectSpec& e, std::uint64_t s, double r) { return std::make_unique<WhiteNoise>(e, s, r); } },
+    { "saturation", [](const EffectSpec& e, std::uint64_t, double) { return std::make_unique<Saturation>(e); } },
+    { "quantization", [](const EffectSpec& e, std::uint64_t, double) { return std::make_unique<Quantization>(e); } },
+    { "gravity_leakage", [](const EffectSpec& e, std::uint64_t, double) { return std::make_unique<GravityLeakage>(e); } },
+    { "timestamp_jitter",
+      [](const EffectSpec& e, std::uint64_t s, double) { return std::make_unique<TimestampJitter>(e, s); } },
+    { "dropouts", [](const EffectSpec& e, std::uint64_t s, double) { return std::make_unique<Dropouts>(e, s); } },
+  };
+  const auto it = factories.find(spec.name);
+  if (it == factories.end())
+  {
+    throw std::runtime_error("unknown effect '" + spec.name + "'");
+  }
+  return it->second(spec, seed, rate);
 }
 }  // namespace periodic_bias_compensation::sim

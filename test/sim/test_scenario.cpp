@@ -172,3 +172,12 @@ TEST(Scenario, YamlRoundTripOfDefaultsAndSpecialText)
   EXPECT_TRUE(b.temperature.enabled);
   EXPECT_EQ(sim::toYaml(b), sim::toYaml(a));
 }
+
+TEST(Scenario, FactoryBuildsEveryVocabularyEffect)
+{
+  for (const sim::EffectInfo& info : sim::effectVocabulary())
+  {
+    EXPECT_NE(sim::makeEffect(sim::defaultEffect(info.name), 1, 100.0), nullptr) << info.name;
+  }
+  EXPECT_THROW(sim::makeEffect(sim::EffectSpec{ "no_such_effect", true, {} }, 1, 100.0), std::runtime_error);
+}
