@@ -88,11 +88,13 @@ std::vector<EffectInfo> buildVocabulary()
                   scalar("correlation_time", "s", 100.0, 1e-3, 1e9, "correlation time") },
                 3 });
   v.push_back({ "vibration",
-                "lines sin(2 pi frequency elapsed + phase), sampled as is (lines above rate/2 alias)",
+                "lines sin(2 pi frequency elapsed + phase), sampled as is (lines above rate/2 alias); "
+                "a bandwidth widens a line to a Lorentzian by a random walk of its phase",
                 { list("frequency", "Hz", 0.0, 1e6, "line frequencies, n values"),
                   list("accel_amplitude", "m/s^2", -100.0, 100.0, "x, y, z per line (3n values)"),
                   list("gyro_amplitude", "rad/s", -10.0, 10.0, "x, y, z per line (3n values)"),
-                  list("phase", "rad", -100.0, 100.0, "per line (n values, default 0)") },
+                  list("phase", "rad", -100.0, 100.0, "per line (n values, default 0)"),
+                  list("bandwidth", "Hz", 0.0, 1e3, "full width at half maximum per line (n values, default 0)") },
                 4 });
   v.push_back({ "white_noise",
                 "N(0, density^2 * rate) per sample; density = Allan deviation at 1 s, two-sided PSD = density^2",
@@ -344,26 +346,33 @@ private:
 class Vibration : public Effect
 {
 public:
-  explicit Vibration(const EffectSpec& spec)
+  Vibration(const EffectSpec& spec, std::uint64_t seed, double rate) : rng_(seed)
   {
     const std::vector<double>& f = param(spec, "frequency");
     const std::size_t n = f.size();
     const std::vector<double> accel = sized(spec, "accel_amplitude", 3 * n);
     const std::vector<double> gyro = sized(spec, "gyro_amplitude", 3 * n);
     const std::vector<double> phase = sized(spec, "phase", n);
+    const std::vector<double> bandwidth = sized(spec, "bandwidth", n);
     for (std::size_t l = 0; l < n; ++l)
     {
-      lines_.push_back({ kTwoPi * f[l], phase[l], Vector3(accel[3 * l], accel[3 * l + 1], accel[3 * l + 2]),
+      // A phase random walk of variance 2 pi B per second gives a Lorentzian of FWHM B [Hz].
+      lines_.push_back({ kTwoPi * f[l], phase[l], std::sqrt(kTwoPi * bandwidth[l] / rate),
+                         Vector3(accel[3 * l], accel[3 * l + 1], accel[3 * l + 2]),
                          Vector3(gyro[3 * l], gyro[3 * l + 1], gyro[3 * l + 2]) });
     }
   }
   void apply(const EffectInput& in, ImuOutput& out) override
   {
-    for (const Line& line : lines_)
+    for (Line& line : lines_)
     {
       const double s = std::sin(line.omega * in.elapsed + line.phase);
       out.accel += s * line.accel;
       out.gyro += s * line.gyro;
+      if (line.phase_step > 0.0)
+      {
+        line.phase += line.phase_step * rng_.normal();
+      }
     }
   }
 
@@ -372,6 +381,7 @@ private:
   {
     double omega;
     double phase;
+    double phase_step;
     Vector3 accel;
     Vector3 gyro;
   };
@@ -393,6 +403,7 @@ private:
   }
 
   std::vector<Line> lines_;
+  Rng rng_;
 };
 
 class WhiteNoise : public Effect
@@ -596,7 +607,7 @@ std::unique_ptr<Effect> makeEffect(const EffectSpec& spec, std::uint64_t seed, d
       [](const EffectSpec& e, std::uint64_t s, double r) { return std::make_unique<BiasRandomWalk>(e, s, r); } },
     { "bias_instability",
       [](const EffectSpec& e, std::uint64_t s, double r) { return std::make_unique<BiasInstability>(e, s, r); } },
-    { "vibration", [](const EffectSpec& e, std::uint64_t, double) { return std::make_unique<Vibration>(e); } },
+    { "vibration", [](const EffectSpec& e, std::uint64_t s, double r) { return std::make_unique<Vibration>(e, s, r); } },
     { "white_noise", [](const EffectSpec& e, std::uint64_t s, double r) { return std::make_unique<WhiteNoise>(e, s, r); } },
     { "saturation", [](const EffectSpec& e, std::uint64_t, double) { return std::make_unique<Saturation>(e); } },
     { "quantization", [](const EffectSpec& e, std::uint64_t, double) { return std::make_unique<Quantization>(e); } },

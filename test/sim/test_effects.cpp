@@ -271,6 +271,26 @@ TEST(Effects, VibrationLineAliasesWhereExpected)
   EXPECT_NEAR(sim_test::lineAmplitude(axis(e.gyro, 2), fs, alias), 0.01, 3e-4);
 }
 
+TEST(Effects, VibrationBandwidthGivesLorentzianCoherenceDecay)
+{
+  // Phase random walk: autocorrelation (1/2) A^2 cos(2 pi f tau) exp(-pi B tau).
+  const double fs = 50.0;
+  const double f = 7.0;  // whole periods in 1 s and 2 s
+  const double bandwidth = 0.2;
+  sim::Scenario s = staticScenario(fs, 4000.0);
+  s.effects.push_back(effect("vibration", { { "frequency", { f } },
+                                            { "accel_amplitude", { 0.3, 0.0, 0.0 } },
+                                            { "bandwidth", { bandwidth } } }));
+  const sim_test::Errors e = run(s);
+  const std::vector<double> ax = axis(e.accel, 0);
+  const double c0 = sim_test::autocovariance(ax, 0);
+  EXPECT_NEAR(c0, 0.5 * 0.3 * 0.3, 0.003);
+  EXPECT_NEAR(sim_test::autocovariance(ax, 50) / c0, std::exp(-M_PI * bandwidth * 1.0), 0.05);
+  EXPECT_NEAR(sim_test::autocovariance(ax, 100) / c0, std::exp(-M_PI * bandwidth * 2.0), 0.05);
+  // Peak of the one-sided Lorentzian PSD: (A^2 / 2) * 2 / (pi B).
+  EXPECT_NEAR(sim_test::psd(ax, fs, f, 4096) / (0.3 * 0.3 / (M_PI * bandwidth)), 1.0, 0.25);
+}
+
 TEST(Effects, QuantizationPutsOutputOnLattice)
 {
   const double step = 0.01;
