@@ -1,7 +1,8 @@
 // Bad input through the real topic: crafted sensor_msgs/Imu on imu/data (NaN/Inf, zero and
 // non-unit quaternions, wrong frame_id, duplicated stamps, stamps going backwards, a gap, a
 // changed sample rate, no orientation). Asserts that nothing non-finite is ever published, that
-// /diagnostics counts every case, and that valid output keeps coming afterwards.
+// /diagnostics counts every case, that valid output keeps coming afterwards, and that the status
+// turns to ERROR when the input stops.
 // Also checks the optional outputs: TF odom -> base_link, path/filtered and path/raw bounded by
 // path_max_length.
 // Private parameters: record_path, a bag that launch/record.launch must be writing;
@@ -371,6 +372,18 @@ TEST(BadInput, EveryCaseCountedNothingNonFinitePublished)
   // The bad input was reported at WARN level with a readable message at least once.
   const auto levels = observer.levels();
   EXPECT_TRUE(levels.count(diagnostic_msgs::DiagnosticStatus::WARN) > 0) << "no WARN status seen";
+
+  // Input stops: the status turns to ERROR with a message saying so.
+  const ros::WallTime silent = ros::WallTime::now();
+  bool error_seen = false;
+  while (!error_seen && (ros::WallTime::now() - silent).toSec() < 10.0)
+  {
+    const auto seen = observer.levels();
+    const auto it = seen.find(diagnostic_msgs::DiagnosticStatus::ERROR);
+    error_seen = it != seen.end() && it->second.find("no IMU data") != std::string::npos;
+    ros::WallDuration(0.2).sleep();
+  }
+  EXPECT_TRUE(error_seen) << "no ERROR 'no IMU data' after the input stopped";
 
   // launch/record.launch runs alongside and must be writing its bag.
   const std::string record_path = pnh.param<std::string>("record_path", "");
