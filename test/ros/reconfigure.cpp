@@ -4,6 +4,8 @@
 //     on the parameter server; bias_state.mode follows)
 //   - an unstable gain and an empty frequency band are refused: the previous values come back
 //   - ~calibrate restarts the constant-bias window; ~save_calibration writes calibration_file
+//   - the IMU mounting comes from tf2: imu_link is published turned +90 deg about z on base_link,
+//     so a level IMU gives a base orientation of -90 deg about z in odometry/filtered
 // Private parameter: calibration_file, the path the compensator was given.
 #include <atomic>
 #include <cmath>
@@ -12,8 +14,11 @@
 #include <thread>
 
 #include <dynamic_reconfigure/client.h>
+#include <geometry_msgs/TransformStamped.h>
 #include <gtest/gtest.h>
+#include <nav_msgs/Odometry.h>
 #include <ros/ros.h>
+#include <tf2_ros/static_transform_broadcaster.h>
 #include <sensor_msgs/Imu.h>
 #include <std_srvs/Trigger.h>
 
@@ -191,11 +196,50 @@ TEST_F(Reconfigure, CalibrateAndSaveServices)
   EXPECT_NE(content.find("constant_bias"), std::string::npos) << content;
 }
 
+TEST_F(Reconfigure, MountingFromTf)
+{
+  std::mutex mutex;
+  nav_msgs::Odometry last;
+  bool received = false;
+  ros::Subscriber sub = nh_.subscribe<nav_msgs::Odometry>(
+      "odometry/filtered", 10, [&](const nav_msgs::Odometry::ConstPtr& msg) {
+        std::lock_guard<std::mutex> lock(mutex);
+        last = *msg;
+        received = true;
+      });
+  const ros::WallTime start = ros::WallTime::now();
+  while ((ros::WallTime::now() - start).toSec() < 10.0)
+  {
+    {
+      std::lock_guard<std::mutex> lock(mutex);
+      if (received)
+      {
+        break;
+      }
+    }
+    ros::WallDuration(0.05).sleep();
+  }
+  std::lock_guard<std::mutex> lock(mutex);
+  ASSERT_TRUE(received) << "no odometry/filtered";
+  const auto& q = last.pose.pose.orientation;
+  EXPECT_NEAR(std::abs(q.w), std::cos(M_PI / 4.0), 1e-3);
+  EXPECT_NEAR(q.z * (q.w < 0 ? -1.0 : 1.0), -std::sin(M_PI / 4.0), 1e-3) << "mounting rotation not applied";
+  EXPECT_EQ(last.child_frame_id, "base_link");
+}
+
 int main(int argc, char** argv)
 {
   testing::InitGoogleTest(&argc, argv);
   ros::init(argc, argv, "reconfigure_test");
   ros::AsyncSpinner spinner(2);
   spinner.start();
+  // IMU mounted turned +90 deg about z: published before any IMU data (latched /tf_static).
+  tf2_ros::StaticTransformBroadcaster static_tf;
+  geometry_msgs::TransformStamped mount;
+  mount.header.frame_id = "base_link";
+  mount.child_frame_id = "imu_link";
+  mount.transform.rotation.z = std::sin(M_PI / 4.0);
+  mount.transform.rotation.w = std::cos(M_PI / 4.0);
+  static_tf.sendTransform(mount);
   return RUN_ALL_TESTS();
 }
