@@ -110,6 +110,8 @@ nav_msgs::Path toPath(const std::deque<geometry_msgs::PoseStamped>& poses, const
 
 CompensatorRos::CompensatorRos(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh), pnh_(pnh)
 {
+  // Timers, services and the subscription may fire on other threads before the constructor is done.
+  boost::recursive_mutex::scoped_lock lock(mutex_);
   std::string why;
   if (!readParameters(RosParameterSource(pnh_), &params_, &why))
   {
