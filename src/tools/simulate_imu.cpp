@@ -23,8 +23,9 @@ namespace
 {
 const char* kUsage =
     "usage: simulate_imu --scenario FILE.yaml [--out OUT.bag] [--csv OUT.csv] [--seed N]\n"
-    "                    [--duration S] [--start-time S]\n"
+    "                    [--duration S] [--start-time S] [--print-scenario]\n"
     "       simulate_imu --list-effects\n"
+    "--print-scenario writes the scenario with every default filled in (YAML) to stdout and exits.\n"
     "Without --out and --csv the scenario is only simulated (timing).\n";
 
 struct Options
@@ -39,6 +40,7 @@ struct Options
   bool has_start_time = false;
   double start_time = 0.0;
   bool list_effects = false;
+  bool print_scenario = false;
 };
 
 Options parseOptions(int argc, char** argv)
@@ -77,6 +79,8 @@ Options parseOptions(int argc, char** argv)
     }
     else if (arg == "--list-effects")
       o.list_effects = true;
+    else if (arg == "--print-scenario")
+      o.print_scenario = true;
     else if (arg == "--help" || arg == "-h")
     {
       std::cout << kUsage;
@@ -190,6 +194,13 @@ int run(const Options& o)
   }
   const std::uint64_t seed = o.has_seed ? o.seed : scenario.seed;
   sim::Simulator simulator(scenario, seed);
+  if (o.print_scenario)
+  {
+    sim::Scenario shown = simulator.scenario();
+    shown.seed = seed;
+    std::cout << sim::toYaml(shown);
+    return 0;
+  }
   const sim::ImuCovariance cov = sim::imuCovariance(simulator.scenario());
 
   std::unique_ptr<rosbag::Bag> bag;
