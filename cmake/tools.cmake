@@ -1,3 +1,11 @@
 # Offline tools that link the cores only (no ROS master, no bag).
 add_executable(evaluate_compensator src/tools/evaluate_compensator.cpp)
 target_link_libraries(evaluate_compensator ${PROJECT_NAME}_core ${PROJECT_NAME}_sim)
+
+# Speed benchmark of the core (Google Benchmark); run by scripts/bench, not a test.
+find_package(benchmark QUIET)
+if(benchmark_FOUND)
+  add_executable(core_benchmark EXCLUDE_FROM_ALL test/bench/core_benchmark.cpp)
+  target_link_libraries(core_benchmark ${PROJECT_NAME}_core ${PROJECT_NAME}_sim benchmark::benchmark)
+  target_compile_definitions(core_benchmark PRIVATE PBC_SCENARIO_DIR="${CMAKE_CURRENT_SOURCE_DIR}/config/scenarios")
+endif()

@@ -101,17 +101,22 @@ private:
 };
 
 /// Recursive least squares with exponential forgetting on [1, cos(k phi), sin(k phi)], k=1..H.
+/// Sizes are bounded (no heap allocation per sample).
 class HarmonicEstimator
 {
+  static constexpr int kMaxParameters = 1 + 2 * kMaxHarmonics;
+  using Vector = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kMaxParameters, 1>;
+  using Matrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxParameters, kMaxParameters>;
+
 public:
   void reset(int harmonics)
   {
     harmonics_ = harmonics;
     const int n = 1 + 2 * harmonics;
-    theta_ = Eigen::VectorXd::Zero(n);
-    covariance_ = Eigen::MatrixXd::Identity(n, n) * 1e4;
-    regressor_ = Eigen::VectorXd::Zero(n);
-    gain_ = Eigen::VectorXd::Zero(n);
+    theta_ = Vector::Zero(n);
+    covariance_ = Matrix::Identity(n, n) * 1e4;
+    regressor_ = Vector::Zero(n);
+    gain_ = Vector::Zero(n);
     updates_ = 0;
   }
   /// One update with forgetting factor lambda; returns the a-priori residual.
@@ -123,7 +128,9 @@ public:
     const double denominator = lambda + regressor_.dot(gain_);
     gain_ /= denominator;
     theta_.noalias() += gain_ * residual;
-    covariance_ -= gain_ * (regressor_.transpose() * covariance_);
+    // P = (P - K h' P) / lambda, with h' P = (P h)' = (K * denominator)' since P is symmetric;
+    // symmetrised so rounding cannot make it indefinite.
+    covariance_.noalias() -= (gain_ * denominator) * gain_.transpose();
     covariance_ /= lambda;
     covariance_ = 0.5 * (covariance_ + covariance_.transpose()).eval();
     ++updates_;
@@ -136,7 +143,7 @@ public:
                 double* variance_factor) const
   {
     double a = 0.0, x = 0.0, v = 0.0;
-    Eigen::VectorXd dx = Eigen::VectorXd::Zero(theta_.size());
+    Vector dx = Vector::Zero(theta_.size());
     for (int k = 1; k <= harmonics_; ++k)
     {
       const double c = std::cos(k * phase), s = std::sin(k * phase);
@@ -175,8 +182,8 @@ private:
   }
 
   int harmonics_ = 1;
-  Eigen::VectorXd theta_, regressor_, gain_;
-  Eigen::MatrixXd covariance_;
+  Vector theta_, regressor_, gain_;
+  Matrix covariance_;
   long updates_ = 0;
 };
 

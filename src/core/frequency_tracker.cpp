@@ -11,6 +11,21 @@ namespace periodic_bias_compensation
 {
 namespace
 {
+/// Smallest 2^a 3^b 5^c >= n: FFTW is fastest on such sizes (a window of 87.7 Hz x 30 s =
+/// 2631 = 3 x 877 samples would need a prime-size transform).
+int fastFftSize(int n)
+{
+  for (int m = n;; ++m)
+  {
+    int r = m;
+    for (int f : { 2, 3, 5 })
+      while (r % f == 0)
+        r /= f;
+    if (r == 1)
+      return m;
+  }
+}
+
 // FFTW's planner is not thread-safe; execution of an existing plan is.
 std::mutex& plannerMutex()
 {
@@ -41,6 +56,9 @@ struct FrequencyTracker::Plan
   fftw_plan plan;
   std::vector<double> power;
   std::vector<double> band_power;
+  std::vector<double> window;  ///< Hann window for `window_length` samples
+  int window_length = 0;
+  double window_sum = 0.0;
 };
 
 FrequencyTracker::FrequencyTracker(int window_samples, double sample_rate)
@@ -52,8 +70,9 @@ FrequencyTracker::FrequencyTracker(int window_samples, double sample_rate)
     throw std::invalid_argument("FrequencyTracker: sample rate must be positive");
   ring_.assign(n_, 0.0);
   times_.assign(n_, 0.0);
-  plan_ = std::make_unique<Plan>(n_);
-  plan_->power.resize(n_ / 2 + 1);
+  fft_size_ = fastFftSize(n_);
+  plan_ = std::make_unique<Plan>(fft_size_);
+  plan_->power.resize(fft_size_ / 2 + 1);
 }
 
 FrequencyTracker::~FrequencyTracker() = default;
@@ -95,7 +114,7 @@ FrequencyEstimate FrequencyTracker::analyse(double f_min, double f_max, double m
   if (available < 16)
     return estimate;
 
-  // The newest `available` samples, mean removed, Hann-windowed, zero-padded to n_.
+  // The newest `available` samples, mean removed, Hann-windowed, zero-padded to the FFT size.
   double mean = 0.0;
   for (int i = 0; i < available; ++i)
     mean += ring_[(head_ - available + i + n_) % n_];
@@ -109,26 +128,39 @@ FrequencyEstimate FrequencyTracker::analyse(double f_min, double f_max, double m
   // A (numerically) constant signal has no period, whatever its rounding noise looks like.
   if (variance / available <= 1e-18 * (1.0 + mean * mean))
     return estimate;
-  double window_sum = 0.0;
-  for (int i = 0; i < n_; ++i)
+  if (plan_->window_length != available)
   {
-    if (i < available)
+    // cos(2 pi (i + 1/2) / N) by rotation: the window is rebuilt at every hop while the ring
+    // fills, and N cos() calls would cost more than the FFT.
+    plan_->window.resize(available);
+    plan_->window_sum = 0.0;
+    const double step = 2.0 * M_PI / available;
+    const double cos_step = std::cos(step), sin_step = std::sin(step);
+    double c = std::cos(0.5 * step), s = std::sin(0.5 * step);
+    for (int i = 0; i < available; ++i)
     {
-      const double w = 0.5 - 0.5 * std::cos(2.0 * M_PI * (i + 0.5) / available);
-      plan_->in[i] = w * (ring_[(head_ - available + i + n_) % n_] - mean);
-      window_sum += w;
+      plan_->window[i] = 0.5 - 0.5 * c;
+      plan_->window_sum += plan_->window[i];
+      const double next_c = c * cos_step - s * sin_step;
+      s = s * cos_step + c * sin_step;
+      c = next_c;
     }
-    else
-    {
-      plan_->in[i] = 0.0;
-    }
+    plan_->window_length = available;
   }
+  const double window_sum = plan_->window_sum;
+  const int first = (head_ - available + n_) % n_;
+  for (int i = 0; i < available; ++i)
+  {
+    const int j = first + i < n_ ? first + i : first + i - n_;
+    plan_->in[i] = plan_->window[i] * (ring_[j] - mean);
+  }
+  std::fill(plan_->in + available, plan_->in + fft_size_, 0.0);
   fftw_execute(plan_->plan);
 
   const double elapsed = times_[(head_ - 1 + n_) % n_] - times_[(head_ - available + n_) % n_];
   const double rate = elapsed > 0.0 ? (available - 1) / elapsed : rate_;
-  const int bins = n_ / 2 + 1;
-  const double df = rate / n_;
+  const int bins = fft_size_ / 2 + 1;
+  const double df = rate / fft_size_;
   for (int k = 0; k < bins; ++k)
     plan_->power[k] = plan_->out[k][0] * plan_->out[k][0] + plan_->out[k][1] * plan_->out[k][1];
 

@@ -48,7 +48,8 @@ public:
 
 private:
   struct Plan;
-  int n_;
+  int n_;          ///< window [samples]
+  int fft_size_;   ///< transform size, >= n_ (zero-padded)
   double rate_;
   std::vector<double> ring_;
   std::vector<double> times_;

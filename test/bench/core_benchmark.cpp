@@ -1,0 +1,98 @@
+// Speed of the estimation core (Google Benchmark): ns per sample, against the floor of merely
+// reading the same samples. Inputs come from the simulator (paper bench and a moored ship in sea
+// state 4), made once before timing.
+#include <benchmark/benchmark.h>
+
+#include <map>
+#include <string>
+#include <vector>
+
+#include "periodic_bias_compensation/core/compensator.h"
+#include "periodic_bias_compensation/core/frequency_tracker.h"
+#include "periodic_bias_compensation/sim/simulator.h"
+
+namespace pbc = periodic_bias_compensation;
+namespace sim = periodic_bias_compensation::sim;
+
+namespace
+{
+const std::vector<pbc::ImuSample>& samples(const std::string& scenario_name)
+{
+  static std::map<std::string, std::vector<pbc::ImuSample>> cache;
+  auto it = cache.find(scenario_name);
+  if (it != cache.end())
+    return it->second;
+  const sim::Scenario scenario = sim::loadScenario(std::string(PBC_SCENARIO_DIR) + "/" + scenario_name + ".yaml");
+  sim::Simulator simulator(scenario, 1);
+  std::vector<pbc::ImuSample> out;
+  sim::Sample s;
+  while (simulator.next(&s))
+  {
+    if (s.dropped)
+      continue;
+    pbc::ImuSample imu;
+    imu.t = s.stamp;
+    imu.specific_force = s.accel;
+    imu.angular_rate = s.gyro;
+    imu.has_orientation = true;
+    imu.orientation = s.orientation;
+    out.push_back(imu);
+  }
+  return cache.emplace(scenario_name, std::move(out)).first->second;
+}
+
+/// The floor: touch every field a compensator reads, with the same loop structure.
+void readFloor(benchmark::State& state, const std::string& scenario)
+{
+  const auto& data = samples(scenario);
+  for (auto _ : state)
+  {
+    double sum = 0.0;
+    for (const auto& s : data)
+      sum += s.t + s.specific_force.sum() + s.angular_rate.sum() + s.orientation.w();
+    benchmark::DoNotOptimize(sum);
+  }
+  state.SetItemsProcessed(state.iterations() * data.size());
+}
+
+void compensate(benchmark::State& state, const std::string& scenario, pbc::Mode mode)
+{
+  const auto& data = samples(scenario);
+  pbc::CompensatorConfig config;
+  config.mode = mode;
+  for (auto _ : state)
+  {
+    pbc::Compensator compensator(config);
+    pbc::CompensatorOutput out;
+    for (const auto& s : data)
+      compensator.addSample(s, &out);
+    benchmark::DoNotOptimize(out.position_filtered.x());
+  }
+  state.SetItemsProcessed(state.iterations() * data.size());
+}
+
+/// One FFT analysis of a full 30 s window at 100 Hz (the cost paid every fft_hop per axis).
+void fftAnalysis(benchmark::State& state)
+{
+  pbc::FrequencyTracker tracker(3000, 100.0);
+  for (int k = 0; k < 3000; ++k)
+    tracker.push(std::sin(0.03 * k) + 0.01 * (k % 7), k / 100.0);
+  for (auto _ : state)
+    benchmark::DoNotOptimize(tracker.analyse(0.05, 2.0, 30.0).frequency);
+  state.SetItemsProcessed(state.iterations());
+}
+}  // namespace
+
+BENCHMARK_CAPTURE(readFloor, paper_bench, std::string("paper_bench"))->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(compensate, paper_bench_default, std::string("paper_bench"), pbc::Mode::kDefault)
+    ->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(compensate, paper_bench_paper, std::string("paper_bench"), pbc::Mode::kPaper)
+    ->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(readFloor, moored_sea_state_4, std::string("moored_sea_state_4"))->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(compensate, moored_sea_state_4_default, std::string("moored_sea_state_4"), pbc::Mode::kDefault)
+    ->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(compensate, moored_sea_state_4_paper, std::string("moored_sea_state_4"), pbc::Mode::kPaper)
+    ->Unit(benchmark::kMicrosecond);
+BENCHMARK(fftAnalysis)->Unit(benchmark::kMicrosecond);
+
+BENCHMARK_MAIN();
