@@ -1,5 +1,16 @@
 # Sim-to-real gap diagnosis (library without ROS, see docs/gap.md), its command-line tools,
 # and the end-to-end test that every shipped scenario's bag is consumed by compensate_bag.
+add_library(${PROJECT_NAME}_gap
+  src/gap/signal.cpp
+  src/gap/features.cpp
+  src/gap/fit.cpp
+  src/gap/diagnose.cpp)
+target_include_directories(${PROJECT_NAME}_gap PUBLIC include)
+target_link_libraries(${PROJECT_NAME}_gap PUBLIC ${PROJECT_NAME}_sim Eigen3::Eigen PkgConfig::FFTW3)
+
+# validate_gap: the diagnosis on simulated recordings whose effect is withheld (no ROS).
+add_executable(validate_gap src/tools/validate_gap.cpp)
+target_link_libraries(validate_gap ${PROJECT_NAME}_gap)
 
 if(CATKIN_ENABLE_TESTING)
   # Issue 3: simulate_imu -> compensate_bag on every file of config/scenarios (60 s each).

@@ -1,0 +1,255 @@
+// Sim-to-real gap diagnosis (no ROS): features of an IMU recording (Welch PSD in log bands,
+// overlapping Allan deviation per tau octave, value / stamp / cross-axis statistics per time
+// segment), their distance from a simulated ensemble in units of its spread, effect
+// candidates fitted on the first part of a recording and judged on the withheld rest.
+// See docs/gap.md.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include "periodic_bias_compensation/sim/scenario.h"
+
+namespace periodic_bias_compensation::gap
+{
+constexpr int kChannels = 6;  ///< ax, ay, az [m/s^2], gx, gy, gz [rad/s]
+
+/// "ax", "ay", "az", "gx", "gy", "gz".
+const std::array<std::string, kChannels>& channelNames();
+
+/// An IMU recording in SI units (REP-145, sensor frame). Samples in stamp order as recorded.
+struct Recording
+{
+  double rate = 0.0;                 ///< nominal sample rate [Hz] (0: estimate from stamps)
+  std::vector<double> stamp;         ///< reported time stamps [s]
+  Eigen::MatrixXd data;              ///< N x 6: ax, ay, az [m/s^2], gx, gy, gz [rad/s]
+  bool has_orientation = false;
+  std::vector<Eigen::Quaterniond> orientation;  ///< reported sensor -> ENU
+  bool has_temperature = false;
+  std::vector<double> temperature;   ///< [degC]
+  std::string source;                ///< file name or "sim seed N"
+
+  std::size_t size() const { return stamp.size(); }
+};
+
+/// Median sample rate from the stamps [Hz] (0 with fewer than 2 samples).
+double estimateRate(const Recording& recording);
+
+/// Samples with stamp - stamp[0] in [from, to) * span (fractions of the recording's span).
+Recording sliceFraction(const Recording& recording, double from, double to);
+
+/// Runs the simulator and keeps what a real sensor would give (dropped samples removed).
+Recording simulateRecording(const sim::Scenario& scenario, std::uint64_t seed);
+
+/// A scenario made to match a recording: same rate, duration and start time.
+sim::Scenario matchScenario(const sim::Scenario& scenario, const Recording& real);
+
+// ---------------------------------------------------------------------------------------------
+// Signal processing
+
+/// One-sided Welch PSD of a signal (Hann window, 50 % overlap, mean removed per segment).
+struct Psd
+{
+  double df = 0.0;                  ///< bin spacing [Hz]
+  std::vector<double> power;        ///< [unit^2 / Hz], bins 0 .. nseg / 2
+};
+
+/// @param x samples
+/// @param rate sample rate [Hz]
+/// @param nseg segment length (clipped to x.size())
+Psd welch(const Eigen::Ref<const Eigen::VectorXd>& x, double rate, int nseg);
+
+/// Welch cross-spectral matrix of 3 signals (accel or gyro triple): real part, per bin, 3x3.
+std::vector<Eigen::Matrix3d> welchCross3(const Eigen::Ref<const Eigen::MatrixXd>& x3, double rate, int nseg);
+
+/// Segment length used for a recording of n samples: a power of two <= n / 4, at most 2^15.
+int welchSegment(std::size_t n);
+
+/// Overlapping Allan deviation at cluster sizes m (tau = m / rate) [unit].
+std::vector<double> allanDeviation(const Eigen::Ref<const Eigen::VectorXd>& x, const std::vector<int>& m);
+
+/// Allan variance of a first-order Gauss-Markov process of unit variance and correlation time
+/// tc at averaging time tau.
+double gaussMarkovAllanVariance(double tau, double tc);
+
+/// Smallest lattice step the values lie on (0 if none): |v / q - round(v / q)| < 1e-3 for at
+/// least 99 % of the values, with fewer distinct values than half the samples.
+double latticeStep(const Eigen::Ref<const Eigen::VectorXd>& x);
+
+/// Fraction of samples whose magnitude equals the largest magnitude (flat tops of clipping).
+double flatTopFraction(const Eigen::Ref<const Eigen::VectorXd>& x, double* limit = nullptr);
+
+/// Stamp statistics: residual of a straight-line fit of stamp against the sample index implied
+/// by the nominal rate, and the lost samples that index implies.
+struct StampStats
+{
+  double rate = 0.0;             ///< fitted rate [Hz]
+  double jitter = 0.0;           ///< robust standard deviation of the residual [s]
+  double lost_fraction = 0.0;    ///< missing / expected samples [-]
+  double bursts = 0.0;           ///< number of gaps [-]
+  double mean_burst = 0.0;       ///< mean number of missing samples per gap [-]
+  double backwards = 0.0;        ///< stamps earlier than their predecessor [-]
+};
+StampStats stampStats(const std::vector<double>& stamp, double rate);
+
+// ---------------------------------------------------------------------------------------------
+// Features
+
+/// Where a feature lives.
+struct FeatureInfo
+{
+  std::string channel;   ///< "ax".."gz", "accel", "gyro", "stamp", "orientation"
+  std::string quantity;  ///< "psd", "allan", "mean", "std", "corr", "flat_top", "lattice", "jitter", ...
+  std::string range;     ///< band "0.1-0.2 Hz", tau "1.28 s", "" for none
+  double lo = 0.0;       ///< band low edge [Hz] or tau [s]
+  double hi = 0.0;       ///< band high edge [Hz] or tau [s]
+  std::string segment;   ///< "all" or "seg k/n"
+  std::string stage;     ///< "sensor" (raw data), "stamps", "orientation"
+  double floor = 0.0;    ///< smallest spread used for z-scores [feature unit]
+  double rel_floor = 0.0;  ///< plus this fraction of |ensemble median|
+};
+
+/// Fixed feature layout (bands, taus, segments) so that real and simulated runs compare.
+struct FeatureLayout
+{
+  double rate = 0.0;
+  int nseg = 0;                       ///< Welch segment length
+  std::vector<double> band_edges;     ///< log bands [Hz], half-octave
+  std::vector<int> allan_m;           ///< cluster sizes (octaves)
+  int segments = 4;                   ///< time segments for mean / std
+  bool orientation = false;           ///< tilt features (the real recording has orientation)
+  bool temperature = false;           ///< temperature-slope features
+  std::vector<FeatureInfo> info;      ///< one per feature value
+};
+
+/// Layout for recordings at this rate with this many samples.
+FeatureLayout makeLayout(double rate, std::size_t n, bool orientation, bool temperature, int segments = 4);
+
+/// Feature values of a recording in the layout's order.
+std::vector<double> computeFeatures(const Recording& recording, const FeatureLayout& layout);
+
+// ---------------------------------------------------------------------------------------------
+// Gap metric
+
+/// Ensemble statistics of every feature.
+struct EnsembleStats
+{
+  std::vector<double> median;
+  std::vector<double> spread;  ///< max(1.4826 MAD, floor)
+};
+EnsembleStats ensembleStats(const std::vector<std::vector<double>>& members, const FeatureLayout& layout);
+
+/// z-scores of a feature vector against an ensemble.
+std::vector<double> zScores(const std::vector<double>& features, const EnsembleStats& stats);
+
+/// Gap = root mean square of max(0, |z| - kZThreshold) over features [-]: 0 when every feature
+/// lies within the ensemble's spread.
+constexpr double kZThreshold = 3.0;
+double gapOf(const std::vector<double>& z);
+
+/// One departure of the real recording from the simulated ensemble.
+struct Departure
+{
+  FeatureInfo where;
+  double real = 0.0;
+  double sim_median = 0.0;
+  double z = 0.0;  ///< size, in ensemble spreads
+};
+
+/// Departures with |z| > threshold, largest first.
+std::vector<Departure> rankDepartures(const std::vector<double>& real, const EnsembleStats& stats,
+                                      const FeatureLayout& layout, double threshold = kZThreshold,
+                                      std::size_t max_count = 40);
+
+// ---------------------------------------------------------------------------------------------
+// Diagnosis
+
+struct DiagnoseOptions
+{
+  int ensemble = 6;              ///< simulated runs per model (seeds 1..ensemble)
+  double fit_fraction = 0.6;     ///< the fit sees [0, fit_fraction), the gap is measured after
+  int threads = 2;
+  double min_shrink = 0.3;       ///< below: "no candidate explains the gap"
+  double pair_gain = 0.15;       ///< a pair is reported if it shrinks this much more
+  std::uint64_t seed_base = 1000003;  ///< ensemble seeds seed_base + i (never the real's)
+  bool verbose = false;
+};
+
+/// One candidate effect with fitted parameters and its gap on the withheld part.
+struct Candidate
+{
+  std::string effect;                          ///< vocabulary name, or "a+b" for a pair
+  std::vector<sim::EffectSpec> specs;          ///< what is added / changed in the scenario
+  std::string params_json;                     ///< fitted parameters (JSON object)
+  std::string note;                            ///< how it was fitted
+  double gap_before = 0.0;
+  double gap_after = 0.0;
+  double shrink = 0.0;                         ///< 1 - after / before
+  std::vector<double> z_after;                 ///< withheld z-scores with the effect
+};
+
+/// Directly visible effect (stamps, lattice, clipping, gaps).
+struct DirectDetection
+{
+  std::string effect;
+  bool detected = false;
+  std::string evidence;
+};
+
+struct Report
+{
+  std::string real_source;
+  std::string scenario_name;
+  double rate = 0.0;
+  double duration = 0.0;
+  std::size_t samples = 0;
+  FeatureLayout layout_all;                    ///< layout of the whole recording ("where")
+  std::vector<double> real_all;
+  EnsembleStats ens_all;
+  std::vector<Departure> where;
+  double gap_all = 0.0;
+  double null_gap = 0.0;                       ///< largest gap of one ensemble member vs the rest
+  FeatureLayout layout_held;                   ///< layout of the withheld part
+  std::vector<double> real_held;
+  EnsembleStats ens_held;
+  double gap_before = 0.0;                     ///< withheld part, scenario as given
+  double null_gap_held = 0.0;
+  std::vector<Candidate> ranking;              ///< best first
+  std::vector<DirectDetection> direct;
+  // verdict
+  std::string verdict_effect;                  ///< effect name, "a+b", "none" (no candidate explains) or "no_gap"
+  std::string verdict_params;                  ///< JSON
+  double confidence = 0.0;
+  double shrink_withheld = 0.0;
+  std::string verdict_text;
+  const Candidate* best = nullptr;
+  // localised places: top departures of the withheld part, before and after the verdict
+  std::vector<Departure> where_held;
+  std::vector<double> where_held_after;
+  double seconds = 0.0;                        ///< wall time
+  std::vector<std::vector<double>> ens_held_members;  ///< for plots
+};
+
+/// Full diagnosis of a real recording against a scenario.
+Report diagnose(const Recording& real, const sim::Scenario& scenario, const DiagnoseOptions& options);
+
+/// report.json text.
+std::string reportJson(const Report& report);
+
+/// One-screen summary.
+std::string reportSummary(const Report& report);
+
+/// Fitted effect candidates for a real recording against a base ensemble (fit part only).
+/// Exposed for tests.
+std::vector<Candidate> fitCandidates(const Recording& real_fit, const std::vector<Recording>& sims_fit,
+                                     const sim::Scenario& scenario);
+
+/// Runs fn(i) for i in [0, n) on `threads` threads.
+void parallelFor(int n, int threads, const std::function<void(int)>& fn);
+}  // namespace periodic_bias_compensation::gap

@@ -1,0 +1,421 @@
+// The diagnosis: ensemble of the scenario as given, "where" departures, effect candidates
+// fitted on the first part, re-simulated and judged on the withheld part, verdict, reports.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <set>
+#include <sstream>
+
+#include "periodic_bias_compensation/gap/gap.h"
+#include "periodic_bias_compensation/sim/effects.h"
+
+namespace periodic_bias_compensation::gap
+{
+namespace
+{
+sim::Scenario withCandidate(const sim::Scenario& base, const std::vector<sim::EffectSpec>& specs)
+{
+  sim::Scenario s = base;
+  std::set<std::string> names;
+  for (const auto& e : specs)
+  {
+    names.insert(e.name);
+  }
+  s.effects.erase(std::remove_if(s.effects.begin(), s.effects.end(),
+                                 [&names](const sim::EffectSpec& e) { return names.count(e.name) > 0; }),
+                  s.effects.end());
+  for (const auto& e : specs)
+  {
+    s.effects.push_back(e);
+  }
+  return s;
+}
+
+std::string num(double v)
+{
+  if (!std::isfinite(v))
+  {
+    return "null";
+  }
+  char buf[40];
+  std::snprintf(buf, sizeof(buf), "%.6g", v);
+  return buf;
+}
+
+std::string str(const std::string& s)
+{
+  std::string o = "\"";
+  for (char c : s)
+  {
+    if (c == '"' || c == '\\')
+    {
+      o += '\\';
+      o += c;
+    }
+    else if (c == '\n')
+    {
+      o += "\\n";
+    }
+    else
+    {
+      o += c;
+    }
+  }
+  return o + "\"";
+}
+
+std::string departureJson(const Departure& d)
+{
+  std::ostringstream o;
+  o << "{\"axis\": " << str(d.where.channel) << ", \"quantity\": " << str(d.where.quantity)
+    << ", \"range\": " << str(d.where.range) << ", \"segment\": " << str(d.where.segment)
+    << ", \"stage\": " << str(d.where.stage) << ", \"real\": " << num(d.real) << ", \"sim_median\": " << num(d.sim_median)
+    << ", \"size_z\": " << num(d.z) << "}";
+  return o.str();
+}
+
+/// Members of an ensemble: features of the withheld part of each run.
+struct Ensemble
+{
+  std::vector<std::vector<double>> held;
+  EnsembleStats stats;
+};
+
+/// Equivalence classes of effects whose outputs are the same signal (a line is a line).
+bool equivalent(const std::string& a, const std::string& b)
+{
+  auto line = [](const std::string& e) { return e == "periodic_bias" || e == "vibration"; };
+  return a == b || (line(a) && line(b));
+}
+}  // namespace
+
+Report diagnose(const Recording& real_in, const sim::Scenario& scenario_in, const DiagnoseOptions& opt)
+{
+  const auto wall0 = std::chrono::steady_clock::now();
+  Report rep;
+  Recording real = real_in;
+  if (real.rate <= 0.0)
+  {
+    real.rate = estimateRate(real);
+  }
+  if (real.size() < 200 || real.rate <= 0.0)
+  {
+    throw std::runtime_error("recording too short for a diagnosis (" + std::to_string(real.size()) + " samples)");
+  }
+  const sim::Scenario scenario = matchScenario(scenario_in, real);
+  sim::validateScenario(scenario);
+  rep.real_source = real.source;
+  rep.scenario_name = scenario.name;
+  rep.rate = real.rate;
+  rep.duration = real.stamp.back() - real.stamp.front();
+  rep.samples = real.size();
+  const int M = std::max(3, opt.ensemble);
+  auto seedOf = [&opt](int i) { return opt.seed_base + static_cast<std::uint64_t>(i); };
+
+  // Base ensemble, whole recordings.
+  std::vector<Recording> base(M);
+  parallelFor(M, opt.threads, [&](int i) { base[i] = simulateRecording(scenario, seedOf(i)); });
+  for (auto& b : base)
+  {
+    b.rate = real.rate;
+  }
+  const bool orient = real.has_orientation;
+  const bool temp = real.has_temperature && scenario.temperature.enabled;
+
+  // 1. Where: whole recording.
+  rep.layout_all = makeLayout(real.rate, real.size(), orient, temp);
+  rep.real_all = computeFeatures(real, rep.layout_all);
+  std::vector<std::vector<double>> all(M);
+  parallelFor(M, opt.threads, [&](int i) { all[i] = computeFeatures(base[i], rep.layout_all); });
+  rep.ens_all = ensembleStats(all, rep.layout_all);
+  rep.where = rankDepartures(rep.real_all, rep.ens_all, rep.layout_all);
+  rep.gap_all = gapOf(zScores(rep.real_all, rep.ens_all));
+  for (int i = 0; i < M; ++i)
+  {
+    std::vector<std::vector<double>> rest;
+    for (int j = 0; j < M; ++j)
+    {
+      if (j != i)
+      {
+        rest.push_back(all[j]);
+      }
+    }
+    rep.null_gap = std::max(rep.null_gap, gapOf(zScores(all[i], ensembleStats(rest, rep.layout_all))));
+  }
+
+  // 2. Withheld part: layout, base ensemble.
+  const Recording real_fit = sliceFraction(real, 0.0, opt.fit_fraction);
+  const Recording real_held = sliceFraction(real, opt.fit_fraction, 1.0);
+  rep.layout_held = makeLayout(real.rate, real_held.size(), orient, temp);
+  rep.real_held = computeFeatures(real_held, rep.layout_held);
+  std::vector<Recording> base_fit(M);
+  rep.ens_held_members.resize(M);
+  parallelFor(M, opt.threads, [&](int i) {
+    base_fit[i] = sliceFraction(base[i], 0.0, opt.fit_fraction);
+    rep.ens_held_members[i] = computeFeatures(sliceFraction(base[i], opt.fit_fraction, 1.0), rep.layout_held);
+  });
+  base.clear();
+  rep.ens_held = ensembleStats(rep.ens_held_members, rep.layout_held);
+  const std::vector<double> z_before = zScores(rep.real_held, rep.ens_held);
+  rep.gap_before = gapOf(z_before);
+  for (int i = 0; i < M; ++i)
+  {
+    std::vector<std::vector<double>> rest;
+    for (int j = 0; j < M; ++j)
+    {
+      if (j != i)
+      {
+        rest.push_back(rep.ens_held_members[j]);
+      }
+    }
+    rep.null_gap_held = std::max(rep.null_gap_held, gapOf(zScores(rep.ens_held_members[i], ensembleStats(rest, rep.layout_held))));
+  }
+
+  // Direct detections (stamps, lattice, clipping, gaps) on the whole recording.
+  {
+    const StampStats st = stampStats(real.stamp, real.rate);
+    char buf[256];
+    std::snprintf(buf, sizeof(buf), "stamp residual robust std %.3g s (rate %.6g Hz), %.0f backwards", st.jitter, st.rate,
+                  st.backwards);
+    rep.direct.push_back({ "timestamp_jitter", st.jitter > 0.02 / real.rate, buf });
+    std::snprintf(buf, sizeof(buf), "%.3g %% of samples missing in %.0f gaps (mean %.3g samples)", 100 * st.lost_fraction,
+                  st.bursts, st.mean_burst);
+    rep.direct.push_back({ "dropouts", st.bursts > 0, buf });
+    std::string lat, clip;
+    bool any_lat = false, any_clip = false;
+    for (int c = 0; c < kChannels; ++c)
+    {
+      const double q = latticeStep(real.data.col(c));
+      double lim = 0;
+      const double ft = flatTopFraction(real.data.col(c), &lim);
+      std::snprintf(buf, sizeof(buf), "%s%s %.4g", lat.empty() ? "" : ", ", channelNames()[c].c_str(), q);
+      lat += buf;
+      std::snprintf(buf, sizeof(buf), "%s%s %.3g %% at %.4g", clip.empty() ? "" : ", ", channelNames()[c].c_str(),
+                    100 * ft, lim);
+      clip += buf;
+      any_lat = any_lat || q > 0;
+      any_clip = any_clip || ft > 1e-4;
+    }
+    rep.direct.push_back({ "quantization", any_lat, "lattice step per axis (0 = none): " + lat });
+    rep.direct.push_back({ "saturation", any_clip, "samples at the largest magnitude: " + clip });
+  }
+
+  // 3. Candidates fitted on the first part, judged on the withheld part.
+  std::vector<Candidate> cands = fitCandidates(real_fit, base_fit, scenario);
+  base_fit.clear();
+  auto judge = [&](std::vector<Candidate>& list) {
+    const int nc = static_cast<int>(list.size());
+    std::vector<std::vector<std::vector<double>>> feats(nc, std::vector<std::vector<double>>(M));
+    std::vector<std::string> errors(nc);
+    parallelFor(nc * M, opt.threads, [&](int idx) {
+      const int c = idx / M, i = idx % M;
+      try
+      {
+        const sim::Scenario s = withCandidate(scenario, list[c].specs);
+        Recording r = simulateRecording(s, seedOf(i));
+        r.rate = real.rate;
+        feats[c][i] = computeFeatures(sliceFraction(r, opt.fit_fraction, 1.0), rep.layout_held);
+      }
+      catch (const std::exception& e)
+      {
+        errors[c] = e.what();
+      }
+    });
+    for (int c = 0; c < nc; ++c)
+    {
+      list[c].gap_before = rep.gap_before;
+      if (!errors[c].empty())
+      {
+        list[c].note += " (not simulated: " + errors[c] + ")";
+        list[c].gap_after = rep.gap_before;
+        list[c].shrink = 0.0;
+        continue;
+      }
+      const EnsembleStats st = ensembleStats(feats[c], rep.layout_held);
+      list[c].z_after = zScores(rep.real_held, st);
+      list[c].gap_after = gapOf(list[c].z_after);
+      list[c].shrink = rep.gap_before > 0 ? 1.0 - list[c].gap_after / rep.gap_before : 0.0;
+    }
+  };
+  judge(cands);
+  std::sort(cands.begin(), cands.end(), [](const Candidate& a, const Candidate& b) { return a.shrink > b.shrink; });
+
+  // Best pair of two different effects, if it explains clearly more.
+  if (cands.size() >= 2 && cands[0].shrink > 0)
+  {
+    std::size_t j = 1;
+    while (j < cands.size() && equivalent(cands[0].effect, cands[j].effect))
+    {
+      ++j;
+    }
+    if (j < cands.size() && cands[j].shrink > 0)
+    {
+      Candidate pair;
+      pair.effect = cands[0].effect + "+" + cands[j].effect;
+      pair.specs = cands[0].specs;
+      pair.specs.insert(pair.specs.end(), cands[j].specs.begin(), cands[j].specs.end());
+      pair.params_json = "{\"" + cands[0].effect + "\": " + cands[0].params_json + ", \"" + cands[j].effect +
+                         "\": " + cands[j].params_json + "}";
+      pair.note = "best two together";
+      std::vector<Candidate> one{ pair };
+      judge(one);
+      if (one[0].shrink > cands[0].shrink + opt.pair_gain)
+      {
+        cands.insert(cands.begin(), one[0]);
+      }
+      else
+      {
+        cands.push_back(one[0]);
+      }
+    }
+  }
+  rep.ranking = cands;
+
+  // Verdict.
+  const double significant_gap = std::max(1.5 * rep.null_gap_held, 0.05);
+  if (rep.gap_before <= significant_gap)
+  {
+    rep.verdict_effect = "no_gap";
+    rep.verdict_params = "{}";
+    rep.confidence = 0.0;
+    rep.verdict_text = "no significant gap: the recording lies within the simulated ensemble's spread";
+  }
+  else if (rep.ranking.empty() || rep.ranking[0].shrink < opt.min_shrink)
+  {
+    rep.verdict_effect = "none";
+    rep.verdict_params = "{}";
+    rep.confidence = 0.0;
+    rep.shrink_withheld = rep.ranking.empty() ? 0.0 : rep.ranking[0].shrink;
+    rep.verdict_text = "no candidate explains the gap (best shrink below " + num(opt.min_shrink) + "); the residual is reported in 'where'";
+  }
+  else
+  {
+    const Candidate& b = rep.ranking[0];
+    double second = 0.0;
+    for (std::size_t i = 1; i < rep.ranking.size(); ++i)
+    {
+      const std::string& e = rep.ranking[i].effect;
+      if (!equivalent(e, b.effect) && b.effect.find(e) == std::string::npos)
+      {
+        second = std::max(second, rep.ranking[i].shrink);
+      }
+    }
+    rep.best = &rep.ranking[0];
+    rep.verdict_effect = b.effect;
+    rep.verdict_params = b.params_json;
+    rep.shrink_withheld = b.shrink;
+    const double margin = b.shrink - std::max(0.0, second);
+    rep.confidence = std::max(0.0, std::min(1.0, b.shrink)) * std::max(0.0, std::min(1.0, 0.4 + margin / 0.4));
+    rep.verdict_text = b.effect + " explains " + num(100.0 * b.shrink) + " % of the gap on the withheld part";
+  }
+  // Localised places of the withheld part, before and after the verdict.
+  rep.where_held = rankDepartures(rep.real_held, rep.ens_held, rep.layout_held, kZThreshold, 12);
+  if (rep.best != nullptr)
+  {
+    for (const Departure& d : rep.where_held)
+    {
+      for (std::size_t i = 0; i < rep.layout_held.info.size(); ++i)
+      {
+        const FeatureInfo& f = rep.layout_held.info[i];
+        if (f.channel == d.where.channel && f.quantity == d.where.quantity && f.range == d.where.range &&
+            f.segment == d.where.segment)
+        {
+          rep.where_held_after.push_back(rep.best->z_after.empty() ? 0.0 : rep.best->z_after[i]);
+          break;
+        }
+      }
+    }
+  }
+  rep.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
+  return rep;
+}
+
+std::string reportJson(const Report& r)
+{
+  std::ostringstream o;
+  o << "{\n  \"schema\": \"periodic_bias_compensation/gap_report/1\",\n";
+  o << "  \"real\": {\"source\": " << str(r.real_source) << ", \"rate_hz\": " << num(r.rate)
+    << ", \"duration_s\": " << num(r.duration) << ", \"samples\": " << r.samples << "},\n";
+  o << "  \"scenario\": " << str(r.scenario_name) << ",\n";
+  o << "  \"gap_metric\": \"rms over features of max(0, |z| - 3), z = (real - ensemble median) / ensemble spread\",\n";
+  o << "  \"gap_all\": " << num(r.gap_all) << ", \"null_gap_all\": " << num(r.null_gap) << ",\n";
+  o << "  \"where\": [";
+  for (std::size_t i = 0; i < r.where.size(); ++i)
+  {
+    o << (i ? ",\n    " : "\n    ") << departureJson(r.where[i]);
+  }
+  o << "\n  ],\n";
+  o << "  \"direct\": [";
+  for (std::size_t i = 0; i < r.direct.size(); ++i)
+  {
+    o << (i ? ",\n    " : "\n    ") << "{\"effect\": " << str(r.direct[i].effect)
+      << ", \"detected\": " << (r.direct[i].detected ? "true" : "false") << ", \"evidence\": " << str(r.direct[i].evidence)
+      << "}";
+  }
+  o << "\n  ],\n";
+  o << "  \"withheld\": {\"gap_before\": " << num(r.gap_before) << ", \"null_gap\": " << num(r.null_gap_held) << "},\n";
+  o << "  \"ranking\": [";
+  for (std::size_t i = 0; i < r.ranking.size(); ++i)
+  {
+    const Candidate& c = r.ranking[i];
+    o << (i ? ",\n    " : "\n    ") << "{\"effect\": " << str(c.effect) << ", \"params\": " << (c.params_json.empty() ? "{}" : c.params_json)
+      << ", \"gap_before\": " << num(c.gap_before) << ", \"gap_after\": " << num(c.gap_after)
+      << ", \"shrink\": " << num(c.shrink) << ", \"fit\": " << str(c.note) << "}";
+  }
+  o << "\n  ],\n";
+  o << "  \"verdict\": {\"effect\": " << str(r.verdict_effect) << ", \"params\": " << r.verdict_params
+    << ", \"confidence\": " << num(r.confidence) << ", \"shrink_withheld\": " << num(r.shrink_withheld)
+    << ", \"text\": " << str(r.verdict_text) << "},\n";
+  o << "  \"localised\": [";
+  for (std::size_t i = 0; i < r.where_held.size(); ++i)
+  {
+    o << (i ? ",\n    " : "\n    ") << "{\"where\": " << departureJson(r.where_held[i])
+      << ", \"z_after\": " << (i < r.where_held_after.size() ? num(r.where_held_after[i]) : "null") << "}";
+  }
+  o << "\n  ],\n";
+  o << "  \"seconds\": " << num(r.seconds) << "\n}\n";
+  return o.str();
+}
+
+std::string reportSummary(const Report& r)
+{
+  std::ostringstream o;
+  char buf[512];
+  std::snprintf(buf, sizeof(buf), "diagnose_gap: %s vs scenario '%s': %zu samples, %.6g Hz, %.1f s\n",
+                r.real_source.c_str(), r.scenario_name.c_str(), r.samples, r.rate, r.duration);
+  o << buf;
+  std::snprintf(buf, sizeof(buf), "WHERE (whole recording): gap %.3g (ensemble member vs rest: up to %.3g), %zu departures; largest:\n",
+                r.gap_all, r.null_gap, r.where.size());
+  o << buf;
+  for (std::size_t i = 0; i < std::min<std::size_t>(8, r.where.size()); ++i)
+  {
+    const Departure& d = r.where[i];
+    std::snprintf(buf, sizeof(buf), "  %-10s %-13s %-20s %-8s %-11s z %+9.3g (real %.4g, sim %.4g)\n", d.where.channel.c_str(),
+                  d.where.quantity.c_str(), d.where.range.c_str(), d.where.segment.c_str(), d.where.stage.c_str(), d.z,
+                  d.real, d.sim_median);
+    o << buf;
+  }
+  o << "DIRECT:";
+  for (const auto& d : r.direct)
+  {
+    o << " " << d.effect << "=" << (d.detected ? "yes" : "no");
+  }
+  o << "\nWHICH (fit on first part, gap on withheld part; before " << num(r.gap_before) << ", null " << num(r.null_gap_held)
+    << "):\n";
+  for (std::size_t i = 0; i < std::min<std::size_t>(8, r.ranking.size()); ++i)
+  {
+    const Candidate& c = r.ranking[i];
+    std::snprintf(buf, sizeof(buf), "  %-34s gap %.3g -> %.3g  shrink %+6.1f %%\n", c.effect.c_str(), c.gap_before,
+                  c.gap_after, 100 * c.shrink);
+    o << buf;
+  }
+  std::snprintf(buf, sizeof(buf), "VERDICT: %s (confidence %.2f, shrink on withheld %.0f %%)\n  params %s\n  %s\n",
+                r.verdict_effect.c_str(), r.confidence, 100 * r.shrink_withheld, r.verdict_params.c_str(),
+                r.verdict_text.c_str());
+  o << buf;
+  std::snprintf(buf, sizeof(buf), "(%.1f s)\n", r.seconds);
+  o << buf;
+  return o.str();
+}
+}  // namespace periodic_bias_compensation::gap
