@@ -94,6 +94,19 @@ ImuSample toImuSample(const sensor_msgs::Imu& msg, const Mounting& mounting)
   return sample;
 }
 
+bool plausible(const ImuSample& sample)
+{
+  for (int i = 0; i < 3; ++i)
+  {
+    // Written so that NaN passes (comparisons with NaN are false).
+    if (std::abs(sample.specific_force[i]) > kMaxSpecificForce || std::abs(sample.angular_rate[i]) > kMaxAngularRate)
+    {
+      return !(std::isfinite(sample.specific_force[i]) && std::isfinite(sample.angular_rate[i]));
+    }
+  }
+  return true;
+}
+
 nav_msgs::Odometry toOdometry(const CompensatorOutput& out, OdometryKind kind, const sensor_msgs::Imu& imu,
                               const Mounting& mounting, const OdometryFrames& frames, const ros::Time& stamp)
 {

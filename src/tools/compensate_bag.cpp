@@ -19,7 +19,9 @@
 #include <string>
 #include <vector>
 
+#include <ros/exception.h>
 #include <rosbag/bag.h>
+#include <rosbag/exceptions.h>
 #include <rosbag/view.h>
 #include <unistd.h>
 
@@ -134,7 +136,17 @@ public:
     {
       Vector3 bias;
       std::string why;
-      if (!loadCalibration(file, &bias, &why))
+      bool loaded = false;
+      try
+      {
+        loaded = loadCalibration(file, &bias, &why);
+      }
+      catch (const std::exception& e)
+      {
+        // Some malformed files make the YAML parser throw instead of returning false.
+        why = "'" + file + "' is not a calibration file (" + e.what() + ")";
+      }
+      if (!loaded)
       {
         throw std::runtime_error("parameter 'calibration_file': " + why);
       }
@@ -150,7 +162,33 @@ public:
     }
   }
 
+  /// Runs over the input; a truncated or corrupt input (rosbag::BagException, a message that
+  /// does not deserialise) becomes one std::runtime_error that says so and what to do.
   void run(const std::string& temp_path)
+  {
+    try
+    {
+      runUnchecked(temp_path);
+    }
+    catch (const rosbag::BagException& e)
+    {
+      throw std::runtime_error(corruptMessage(e.what()));
+    }
+    catch (const ros::Exception& e)
+    {
+      throw std::runtime_error(corruptMessage(e.what()));
+    }
+  }
+
+  std::string corruptMessage(const std::string& what) const
+  {
+    return "input bag '" + options_.in + "' is truncated or corrupt (" + what +
+           "); a bag cut off while recording has no index: 'rosbag reindex " + options_.in +
+           "' recovers the messages written before the cut. Nothing was written to " + options_.out +
+           (received_ > 0 ? " (" + std::to_string(received_) + " IMU messages had been read)" : std::string());
+  }
+
+  void runUnchecked(const std::string& temp_path)
   {
     rosbag::Bag in;
     in.open(options_.in, rosbag::bagmode::Read);
@@ -215,10 +253,10 @@ public:
     std::fprintf(stderr,
                  "compensate_bag: %" PRIu64 " IMU messages, %" PRIu64 " accepted, rejected: %" PRIu64
                  " non-finite, %" PRIu64 " bad quaternion, %" PRIu64 " duplicate stamp, %" PRIu64
-                 " wrong frame; resets: %" PRIu64 " backwards, %" PRIu64 " gaps; %" PRIu64
+                 " wrong frame, %" PRIu64 " out of range; resets: %" PRIu64 " backwards, %" PRIu64 " gaps; %" PRIu64
                  " non-finite outputs not written\n",
                  received_, c.accepted, c.rejected_non_finite, c.rejected_bad_quaternion, c.rejected_duplicate,
-                 wrong_frame_, c.resets_backwards, c.gap_resets, nonfinite_outputs_);
+                 wrong_frame_, out_of_range_, c.resets_backwards, c.gap_resets, nonfinite_outputs_);
   }
 
 private:
@@ -235,8 +273,14 @@ private:
       std::fprintf(stderr, "compensate_bag: no mounting transform offline: %s is taken as aligned with %s\n",
                    imu.header.frame_id.c_str(), params_.ros.base_frame.c_str());
     }
+    const ImuSample sample = toImuSample(imu, mounting_);
+    if (!plausible(sample))
+    {
+      ++out_of_range_;
+      return;
+    }
     CompensatorOutput result;
-    const SampleStatus status = compensator_.addSample(toImuSample(imu, mounting_), &result);
+    const SampleStatus status = compensator_.addSample(sample, &result);
     if (status != SampleStatus::kAccepted && status != SampleStatus::kGapReset &&
         status != SampleStatus::kResetBackwards)
     {
@@ -264,6 +308,7 @@ private:
   Mounting mounting_;
   std::uint64_t received_ = 0;
   std::uint64_t wrong_frame_ = 0;
+  std::uint64_t out_of_range_ = 0;
   std::uint64_t nonfinite_outputs_ = 0;
 };
 
@@ -289,7 +334,9 @@ void checkPaths(const Options& options)
 }
 }  // namespace
 
-int main(int argc, char** argv)
+/// The whole tool; main() only calls it. Also called in-process by the bag fuzz harness
+/// (test/fuzz/fuzz_bag.cpp), which compiles this file with PBC_COMPENSATE_BAG_NO_MAIN.
+int compensateBagMain(int argc, char** argv)
 {
   Options options;
   std::string temp_path;
@@ -323,3 +370,10 @@ int main(int argc, char** argv)
     return 1;
   }
 }
+
+#ifndef PBC_COMPENSATE_BAG_NO_MAIN
+int main(int argc, char** argv)
+{
+  return compensateBagMain(argc, argv);
+}
+#endif
