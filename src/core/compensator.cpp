@@ -140,10 +140,11 @@ public:
   /// for the current phase; omega [rad/s] is the fundamental. variance_factor: h' P h of the
   /// displacement (multiply by the residual variance).
   void evaluate(double phase, double omega, double* acceleration, double* position, double* velocity,
-                double* variance_factor) const
+                double* variance_factor, double* velocity_variance_factor) const
   {
     double a = 0.0, x = 0.0, v = 0.0;
     Vector dx = Vector::Zero(theta_.size());
+    Vector dv = Vector::Zero(theta_.size());
     for (int k = 1; k <= harmonics_; ++k)
     {
       const double c = std::cos(k * phase), s = std::sin(k * phase);
@@ -154,11 +155,14 @@ public:
       v += (ck * s - sk * c) / w;
       dx[2 * k - 1] = -c / (w * w);
       dx[2 * k] = -s / (w * w);
+      dv[2 * k - 1] = s / w;
+      dv[2 * k] = -c / w;
     }
     *acceleration = a;
     *position = x;
     *velocity = v;
     *variance_factor = dx.dot(covariance_ * dx);
+    *velocity_variance_factor = dv.dot(covariance_ * dv);
   }
   double constant() const
   {
@@ -447,7 +451,8 @@ public:
       calibrated_ = false;
       constant_bias_.setZero();
     }
-    axes_ = {};
+    for (auto& axis : axes_)
+      axis = AxisEstimator();
     resetMotion();
   }
 
@@ -716,6 +721,7 @@ private:
       state.d_v = axis.d_v;
       state.d_p = axis.d_p;
       out.acceleration_level[i] = compensated;
+      out.acceleration_constant_compensated[i] = a[i] - (config_.enable_constant ? constant_bias_[i] : 0.0);
     }
     out.calibrated = calibrated_;
     return out;
@@ -819,7 +825,7 @@ private:
   /// drift_time_constant, its integral state being the constant bias.
   void stepDefault(AxisEstimator& axis, double raw, double compensated, double dt, int i, CompensatorOutput* out)
   {
-    double wave_a = 0.0, wave_x = 0.0, wave_v = 0.0, variance_factor = 0.0;
+    double wave_a = 0.0, wave_x = 0.0, wave_v = 0.0, variance_factor = 0.0, velocity_variance_factor = 0.0;
     if (axis.locked && config_.enable_periodic)
     {
       // The FFT reports the frequency at the centre of its window; a drifting encounter
@@ -833,7 +839,8 @@ private:
       axis.residual_variance = (1.0 - beta) * axis.residual_variance + beta * residual * residual;
       // A fit of less than one period is not yet a description of the oscillation.
       if (axis.harmonic.updates() >= rate_ / frequency)
-        axis.harmonic.evaluate(axis.phase, omega, &wave_a, &wave_x, &wave_v, &variance_factor);
+        axis.harmonic.evaluate(axis.phase, omega, &wave_a, &wave_x, &wave_v, &variance_factor,
+                               &velocity_variance_factor);
     }
     else if (dt > 0.0)
     {
@@ -864,6 +871,7 @@ private:
     out->position_variance[i] = density / (32.0 * w * w * w);
     out->velocity_variance[i] = 3.0 * density / (32.0 * w);
     out->wave_position_variance[i] = axis.residual_variance * variance_factor;
+    out->wave_velocity_variance[i] = axis.residual_variance * velocity_variance_factor;
   }
 
   /// Paper mode, Eq. 1-7 with the decisions of docs/algorithm.md: integrals on the corrected
@@ -916,6 +924,7 @@ private:
     out->position_variance[i] = density * t * t * t / 3.0;
     out->velocity_variance[i] = density * t;
     out->wave_position_variance[i] = out->position_variance[i];
+    out->wave_velocity_variance[i] = out->velocity_variance[i];
   }
 
   CompensatorConfig config_;

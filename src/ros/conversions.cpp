@@ -149,8 +149,7 @@ nav_msgs::Odometry toOdometry(const CompensatorOutput& out, OdometryKind kind, c
   const Matrix3 r_base_level = r_level_base.transpose();
   fromVector(r_base_level * velocity_level, &msg.twist.twist.linear);
   fromVector(r_base_imu * toVector(imu.angular_velocity), &msg.twist.twist.angular);
-  // The core gives one velocity variance; the wave velocity shares it.
-  const Vector3& velocity_variance = out.velocity_variance;
+  const Vector3& velocity_variance = wave ? out.wave_velocity_variance : out.velocity_variance;
   Matrix3 rate_cov;
   if (messageCovariance(imu.angular_velocity_covariance, &rate_cov))
   {

@@ -119,10 +119,14 @@ struct CompensatorOutput
   Vector3 position_wave{ 0, 0, 0 };      ///< wave (periodic) motion about the slow motion [m]
   Vector3 velocity_wave{ 0, 0, 0 };      ///< [m/s]
   Vector3 acceleration_level{ 0, 0, 0 }; ///< gravity-free level acceleration, bias removed [m/s^2]
+  /// Gravity-free level acceleration with only the calibrated constant bias removed (no
+  /// adaptive correction): what plain constant compensation integrates [m/s^2].
+  Vector3 acceleration_constant_compensated{ 0, 0, 0 };
   Quaternion orientation{ 1, 0, 0, 0 };  ///< sensor -> level frame used for this sample
   Vector3 position_variance{ 0, 0, 0 };  ///< per-axis variance of position_filtered [m^2]
   Vector3 velocity_variance{ 0, 0, 0 };  ///< [m^2/s^2]
   Vector3 wave_position_variance{ 0, 0, 0 };  ///< [m^2]
+  Vector3 wave_velocity_variance{ 0, 0, 0 };  ///< [m^2/s^2]
   std::array<AxisState, 3> axes;
   bool calibrated = false;
 };
