@@ -338,7 +338,7 @@ std::string reportJson(const Report& r)
   o << "  \"real\": {\"source\": " << str(r.real_source) << ", \"rate_hz\": " << num(r.rate)
     << ", \"duration_s\": " << num(r.duration) << ", \"samples\": " << r.samples << "},\n";
   o << "  \"scenario\": " << str(r.scenario_name) << ",\n";
-  o << "  \"gap_metric\": \"rms over features of max(0, |z| - 3), z = (real - ensemble median) / ensemble spread\",\n";
+  o << "  \"gap_metric\": \"rms over features of log(1 + max(0, |z| - 3)), z = (real - ensemble median) / ensemble spread\",\n";
   o << "  \"gap_all\": " << num(r.gap_all) << ", \"null_gap_all\": " << num(r.null_gap) << ",\n";
   o << "  \"where\": [";
   for (std::size_t i = 0; i < r.where.size(); ++i)

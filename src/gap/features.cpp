@@ -69,19 +69,19 @@ FeatureLayout makeLayout(double rate, std::size_t n, bool orientation, bool temp
     for (std::size_t b = 0; b + 1 < edges.size(); ++b)
     {
       L.info.push_back({ names[c], "psd", fmt("%.3g-%.3g Hz", edges[b], edges[b + 1]), edges[b], edges[b + 1], "all",
-                         "sensor", 0.04, 0.0 });
+                         "sensor", 0.012, 0.0 });
     }
     for (int m : L.allan_m)
     {
-      L.info.push_back({ names[c], "allan", fmt("tau %.3g s", m / rate), m / rate, m / rate, "all", "sensor", 0.03, 0.0 });
+      L.info.push_back({ names[c], "allan", fmt("tau %.3g s", m / rate), m / rate, m / rate, "all", "sensor", 0.012, 0.0 });
     }
     L.info.push_back({ names[c], "mean", "", 0, 0, "all", "sensor", abs_floor, 2e-5 });
-    L.info.push_back({ names[c], "log_std", "", 0, 0, "all", "sensor", 0.01, 0.0 });
+    L.info.push_back({ names[c], "log_std", "", 0, 0, "all", "sensor", 0.003, 0.0 });
     for (int s = 0; s < segments; ++s)
     {
       const std::string seg = "seg " + std::to_string(s + 1) + "/" + std::to_string(segments);
       L.info.push_back({ names[c], "mean", "", 0, 0, seg, "sensor", abs_floor, 2e-5 });
-      L.info.push_back({ names[c], "log_std", "", 0, 0, seg, "sensor", 0.015, 0.0 });
+      L.info.push_back({ names[c], "log_std", "", 0, 0, seg, "sensor", 0.005, 0.0 });
     }
     L.info.push_back({ names[c], "flat_top", "", 0, 0, "all", "sensor", 2e-4, 0.0 });
     L.info.push_back({ names[c], "lattice", "", 0, 0, "all", "sensor", 0.1, 0.0 });
@@ -290,7 +290,7 @@ double gapOf(const std::vector<double>& z)
   double sum = 0.0;
   for (double v : z)
   {
-    const double e = std::max(0.0, std::abs(v) - kZThreshold);
+    const double e = std::log1p(std::max(0.0, std::abs(v) - kZThreshold));
     sum += e * e;
   }
   return std::sqrt(sum / z.size());

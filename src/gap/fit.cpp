@@ -159,6 +159,7 @@ struct FitStats
 {
   Vec mean = Vec(kChannels, 0.0);
   std::vector<Psd> psd;                       ///< per channel
+  std::vector<Psd> psd_fine;                  ///< per channel, long segments (spectral lines)
   std::vector<Vec> avar;                      ///< per channel, Allan variance at allan_m
   std::array<std::vector<Eigen::Matrix3d>, 2> cross;  ///< accel, gyro
   StampStats stamps;
@@ -237,6 +238,16 @@ bool leverArm(const Recording& r, double rate, Eigen::Vector3d* out)
   return out->allFinite();
 }
 
+int fineSegment(std::size_t n)
+{
+  int nseg = 16;
+  while (static_cast<std::size_t>(nseg) * 2 <= n / 2 && nseg < (1 << 18))
+  {
+    nseg *= 2;
+  }
+  return nseg;
+}
+
 FitStats fitStats(const Recording& r, double rate, int nseg, const std::vector<int>& allan_m, bool want_temperature)
 {
   FitStats s;
@@ -246,6 +257,7 @@ FitStats fitStats(const Recording& r, double rate, int nseg, const std::vector<i
     const Eigen::VectorXd x = r.data.col(c);
     s.mean[c] = n ? x.mean() : 0.0;
     s.psd.push_back(welch(x, rate, nseg));
+    s.psd_fine.push_back(welch(x, rate, fineSegment(n)));
     Vec ad = allanDeviation(x, allan_m);
     for (double& a : ad)
     {
@@ -357,13 +369,13 @@ std::vector<std::size_t> motionBins(const std::vector<FitStats>& sims, int c)
 
 Vec meanPsd(const std::vector<FitStats>& sims, int c)
 {
-  const std::size_t nb = sims[0].psd[c].power.size();
+  const std::size_t nb = sims[0].psd_fine[c].power.size();
   Vec mean(nb, 0.0);
   for (const auto& s : sims)
   {
     for (std::size_t k = 0; k < nb; ++k)
     {
-      mean[k] += s.psd[c].power[k] / sims.size();
+      mean[k] += s.psd_fine[c].power[k] / sims.size();
     }
   }
   return mean;
@@ -600,7 +612,7 @@ std::vector<Candidate> fitCandidates(const Recording& real_fit, const std::vecto
           {
             k2.push_back(3.0 * diff[c][k] / tau);
           }
-          sig = sig || (diff[c][k] > 4.0 * sims_sd[c][k] && diff[c][k] > 0.5 * simv[c][k]);
+          sig = sig || (diff[c][k] > 4.0 * sims_sd[c][k] && diff[c][k] > 0.05 * simv[c][k]);
         }
         if (sig && !k2.empty())
         {
@@ -631,7 +643,7 @@ std::vector<Candidate> fitCandidates(const Recording& real_fit, const std::vecto
       {
         for (std::size_t k = 0; k < nt; ++k)
         {
-          if (diff[c][k] > 4.0 * sims_sd[c][k] && diff[c][k] > 0.3 * simv[c][k])
+          if (diff[c][k] > 4.0 * sims_sd[c][k] && diff[c][k] > 0.05 * simv[c][k])
           {
             sig[c] = true;
           }
@@ -698,6 +710,17 @@ std::vector<Candidate> fitCandidates(const Recording& real_fit, const std::vecto
     bool any = false;
     for (int c = 0; c < kChannels; ++c)
     {
+      const Cmp mm = compare(R, S, [c](const FitStats& s) { return s.mean[c]; });
+      if (c < 3 && std::abs(mm.sim) > 1.0)
+      {
+        // an axis carrying gravity: its mean scales (indistinguishable from a bias on this axis)
+        if (mm.significant(4.0, 1e-5))
+        {
+          acc[c] = mm.real / mm.sim - 1.0;
+          any = true;
+        }
+        continue;
+      }
       const auto bins = motionBins(S, c);
       if (bins.size() < 2)
       {
@@ -746,10 +769,38 @@ std::vector<Candidate> fitCandidates(const Recording& real_fit, const std::vecto
   {
     Vec acc(9, 0.0), gyr(9, 0.0);
     bool any = false;
+    // gravity axis: the mean of the others moves by M_ij g
+    int jg = -1;
+    for (int j = 0; j < 3; ++j)
+    {
+      if (std::abs(meanOf([&]() { Vec v; for (const auto& st : S) v.push_back(st.mean[j]); return v; }())) > 1.0 &&
+          (jg < 0 || std::abs(S[0].mean[j]) > std::abs(S[0].mean[jg])))
+      {
+        jg = j;
+      }
+    }
     for (int s = 0; s < 2; ++s)
     {
       for (int j = 0; j < 3; ++j)
       {
+        if (s == 0 && j == jg)
+        {
+          for (int i = 0; i < 3; ++i)
+          {
+            if (i == j)
+            {
+              continue;
+            }
+            const Cmp mi = compare(R, S, [i](const FitStats& st) { return st.mean[i]; });
+            const Cmp mj = compare(R, S, [j](const FitStats& st) { return st.mean[j]; });
+            if (mi.significant(4.0, 1e-5))
+            {
+              acc[3 * i + j] = (mi.real - mi.sim) / mj.sim;
+              any = true;
+            }
+          }
+          continue;
+        }
         const auto bins = motionBins(S, 3 * s + j);
         if (bins.size() < 2)
         {
@@ -851,13 +902,13 @@ std::vector<Candidate> fitCandidates(const Recording& real_fit, const std::vecto
       {
         for (std::size_t k = 0; k < maxp.size(); ++k)
         {
-          maxp[k] = std::max(maxp[k], s.psd[c].power[k]);
+          maxp[k] = std::max(maxp[k], s.psd_fine[c].power[k]);
         }
       }
-      lines[c] = strongestLine(R.psd[c], maxp, 6.0);
+      lines[c] = strongestLine(R.psd_fine[c], maxp, 6.0);
       if (lines[c].power > 0)
       {
-        lines[c] = strongestLine(R.psd[c], simp[c], 6.0);
+        lines[c] = strongestLine(R.psd_fine[c], simp[c], 6.0);
       }
     }
     // periodic_bias
@@ -907,13 +958,13 @@ std::vector<Candidate> fitCandidates(const Recording& real_fit, const std::vecto
         Vec amp(6, 0.0);
         for (int c = 0; c < kChannels; ++c)
         {
-          const auto& p = R.psd[c].power;
+          const auto& p = R.psd_fine[c].power;
           double pw = 0.0;
           bool shows = false;
           const std::size_t half = static_cast<std::size_t>(std::max(2.0, lines[cbest].width_bins / 2 + 1));
           for (std::size_t k = k0 > half ? k0 - half : 1; k <= std::min(p.size() - 1, k0 + half); ++k)
           {
-            pw += std::max(0.0, p[k] - simp[c][k]) * R.psd[c].df;
+            pw += std::max(0.0, p[k] - simp[c][k]) * R.psd_fine[c].df;
             shows = shows || p[k] > 6.0 * simp[c][k];
           }
           if (shows)
@@ -926,7 +977,7 @@ std::vector<Candidate> fitCandidates(const Recording& real_fit, const std::vecto
         double bw = 0.0;
         if (lines[cbest].width_bins > 6)
         {
-          bw = (lines[cbest].width_bins - 4) * R.psd[cbest].df / 2.0;
+          bw = (lines[cbest].width_bins - 4) * R.psd_fine[cbest].df / 2.0;
         }
         std::vector<sim::EffectSpec> specs = existing(scenario, "vibration");
         sim::EffectSpec e{ "vibration", true, {} };

@@ -37,6 +37,9 @@ struct Options
   std::string md;
   std::string json;
   bool quiet = false;
+  bool verbose = false;
+  std::string only_effect;
+  std::string only_motion;
 };
 
 sim::Scenario baseScenario(const std::string& motion, double rate, double duration)
@@ -283,6 +286,18 @@ int main(int argc, char** argv)
     {
       opt.quiet = true;
     }
+    else if (a == "--verbose")
+    {
+      opt.verbose = true;
+    }
+    else if (a == "--effect")
+    {
+      opt.only_effect = value();
+    }
+    else if (a == "--motion")
+    {
+      opt.only_motion = value();
+    }
     else
     {
       std::cerr << "usage: validate_gap [--small] [--seeds N] [--duration S] [--rate HZ] [--md FILE] [--json FILE] [--quiet]\n";
@@ -305,6 +320,10 @@ int main(int argc, char** argv)
   const auto t0 = std::chrono::steady_clock::now();
   gap::DiagnoseOptions dopt;
   int case_index = 0;
+  if (!opt.only_motion.empty())
+  {
+    motions = { opt.only_motion };
+  }
   for (const std::string& motion : motions)
   {
     const sim::Scenario base = baseScenario(motion, opt.rate, opt.duration);
@@ -323,6 +342,10 @@ int main(int argc, char** argv)
     }
     for (const auto& [effect, k] : cases)
     {
+      if (!opt.only_effect.empty() && effect != opt.only_effect)
+      {
+        continue;
+      }
       for (int sd = 0; sd < opt.seeds; ++sd)
       {
         ++case_index;
@@ -361,6 +384,10 @@ int main(int argc, char** argv)
           gap::Recording real = gap::simulateRecording(real_s, seed);
           real.source = "validate " + motion + " " + effect;
           const gap::Report rep = gap::diagnose(real, base, dopt);
+          if (opt.verbose)
+          {
+            std::cerr << gap::reportSummary(rep);
+          }
           cr.verdict = rep.verdict_effect;
           cr.confidence = rep.confidence;
           cr.gap_before = rep.gap_before;

@@ -148,8 +148,9 @@ EnsembleStats ensembleStats(const std::vector<std::vector<double>>& members, con
 /// z-scores of a feature vector against an ensemble.
 std::vector<double> zScores(const std::vector<double>& features, const EnsembleStats& stats);
 
-/// Gap = root mean square of max(0, |z| - kZThreshold) over features [-]: 0 when every feature
-/// lies within the ensemble's spread.
+/// Gap = root mean square of log(1 + max(0, |z| - kZThreshold)) over features [-]: 0 when every
+/// feature lies within the ensemble's spread; the logarithm keeps one huge departure (a mean
+/// many spreads off) from hiding many moderate ones.
 constexpr double kZThreshold = 3.0;
 double gapOf(const std::vector<double>& z);
 
