@@ -159,6 +159,7 @@ Report diagnose(const Recording& real_in, const sim::Scenario& scenario_in, cons
   rep.ens_held = ensembleStats(rep.ens_held_members, rep.layout_held);
   const std::vector<double> z_before = zScores(rep.real_held, rep.ens_held);
   rep.gap_before = gapOf(z_before);
+  std::vector<double> null_gaps;
   for (int i = 0; i < M; ++i)
   {
     std::vector<std::vector<double>> rest;
@@ -169,7 +170,19 @@ Report diagnose(const Recording& real_in, const sim::Scenario& scenario_in, cons
         rest.push_back(rep.ens_held_members[j]);
       }
     }
-    rep.null_gap_held = std::max(rep.null_gap_held, gapOf(zScores(rep.ens_held_members[i], ensembleStats(rest, rep.layout_held))));
+    const std::vector<double> zn = zScores(rep.ens_held_members[i], ensembleStats(rest, rep.layout_held));
+    rep.null_gap_held = std::max(rep.null_gap_held, gapOf(zn));
+    null_gaps.push_back(gapOf(zn));
+    for (double v : zn)
+    {
+      rep.null_max_z_held = std::max(rep.null_max_z_held, std::abs(v));
+    }
+  }
+  std::sort(null_gaps.begin(), null_gaps.end());
+  rep.null_gap_typical = null_gaps[null_gaps.size() / 2];
+  for (double v : z_before)
+  {
+    rep.max_z_held = std::max(rep.max_z_held, std::abs(v));
   }
 
   // Direct detections (stamps, lattice, clipping, gaps) on the whole recording.
@@ -234,13 +247,33 @@ Report diagnose(const Recording& real_in, const sim::Scenario& scenario_in, cons
       }
       const EnsembleStats st = ensembleStats(feats[c], rep.layout_held);
       list[c].z_after = zScores(rep.real_held, st);
-      list[c].gap_after = gapOf(list[c].z_after);
-      list[c].shrink = rep.gap_before > 0 ? 1.0 - list[c].gap_after / rep.gap_before : 0.0;
+      list[c].gap_after = gapOf(list[c].z_after, st.spread, rep.ens_held.spread);
+      const double excess = rep.gap_before - rep.null_gap_typical;
+      list[c].shrink = excess > 0 ? std::min(1.0, (rep.gap_before - list[c].gap_after) / excess) : 0.0;
     }
   };
   judge(cands);
   std::sort(cands.begin(), cands.end(), [](const Candidate& a, const Candidate& b) { return a.shrink > b.shrink; });
 
+  // A pure spectral line is the same signal for periodic_bias and vibration: when both explain
+  // about as much, name it by its frequency (below 1 Hz: a periodic bias, above: a vibration).
+  if (cands.size() >= 2 && equivalent(cands[0].effect, cands[1].effect) && cands[0].effect != cands[1].effect &&
+      cands[0].shrink - cands[1].shrink < 0.1)
+  {
+    double f = 0.0;
+    for (const auto& c : cands)
+    {
+      if (c.effect == "vibration" && !c.specs.empty())
+      {
+        f = c.specs.back().params.at("frequency")[0];
+      }
+    }
+    const std::string want = f > 1.0 ? "vibration" : "periodic_bias";
+    if (cands[1].effect == want)
+    {
+      std::swap(cands[0], cands[1]);
+    }
+  }
   // Best pair of two different effects, if it explains clearly more.
   if (cands.size() >= 2 && cands[0].shrink > 0)
   {
@@ -274,7 +307,9 @@ Report diagnose(const Recording& real_in, const sim::Scenario& scenario_in, cons
 
   // Verdict.
   const double significant_gap = std::max(1.5 * rep.null_gap_held, 0.05);
-  if (rep.gap_before <= significant_gap)
+  const bool significant = rep.gap_before > significant_gap ||
+                           rep.max_z_held > std::max(2.0 * rep.null_max_z_held, 2.0 * kZThreshold);
+  if (!significant)
   {
     rep.verdict_effect = "no_gap";
     rep.verdict_params = "{}";
@@ -296,7 +331,7 @@ Report diagnose(const Recording& real_in, const sim::Scenario& scenario_in, cons
     for (std::size_t i = 1; i < rep.ranking.size(); ++i)
     {
       const std::string& e = rep.ranking[i].effect;
-      if (!equivalent(e, b.effect) && b.effect.find(e) == std::string::npos)
+      if (!equivalent(e, b.effect) && b.effect.find(e) == std::string::npos && e.find('+') == std::string::npos)
       {
         second = std::max(second, rep.ranking[i].shrink);
       }
@@ -354,7 +389,9 @@ std::string reportJson(const Report& r)
       << "}";
   }
   o << "\n  ],\n";
-  o << "  \"withheld\": {\"gap_before\": " << num(r.gap_before) << ", \"null_gap\": " << num(r.null_gap_held) << "},\n";
+  o << "  \"withheld\": {\"gap_before\": " << num(r.gap_before) << ", \"null_gap\": " << num(r.null_gap_held)
+    << ", \"null_gap_typical\": " << num(r.null_gap_typical)
+    << ", \"max_z\": " << num(r.max_z_held) << ", \"null_max_z\": " << num(r.null_max_z_held) << "},\n";
   o << "  \"ranking\": [";
   for (std::size_t i = 0; i < r.ranking.size(); ++i)
   {
@@ -406,8 +443,8 @@ std::string reportSummary(const Report& r)
   for (std::size_t i = 0; i < std::min<std::size_t>(8, r.ranking.size()); ++i)
   {
     const Candidate& c = r.ranking[i];
-    std::snprintf(buf, sizeof(buf), "  %-34s gap %.3g -> %.3g  shrink %+6.1f %%\n", c.effect.c_str(), c.gap_before,
-                  c.gap_after, 100 * c.shrink);
+    std::snprintf(buf, sizeof(buf), "  %-34s gap %.3g -> %.3g  shrink %+6.1f %%  %.150s\n", c.effect.c_str(), c.gap_before,
+                  c.gap_after, 100 * c.shrink, c.params_json.c_str());
     o << buf;
   }
   std::snprintf(buf, sizeof(buf), "VERDICT: %s (confidence %.2f, shrink on withheld %.0f %%)\n  params %s\n  %s\n",

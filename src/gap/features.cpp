@@ -296,6 +296,25 @@ double gapOf(const std::vector<double>& z)
   return std::sqrt(sum / z.size());
 }
 
+double gapOf(const std::vector<double>& z, const std::vector<double>& spread, const std::vector<double>& base_spread)
+{
+  if (z.empty())
+  {
+    return 0.0;
+  }
+  double sum = 0.0;
+  for (std::size_t i = 0; i < z.size(); ++i)
+  {
+    double e = std::log1p(std::max(0.0, std::abs(z[i]) - kZThreshold));
+    if (i < spread.size() && i < base_spread.size() && base_spread[i] > 0)
+    {
+      e += kSpreadPenalty * std::max(0.0, std::log(spread[i] / base_spread[i]));
+    }
+    sum += e * e;
+  }
+  return std::sqrt(sum / z.size());
+}
+
 std::vector<Departure> rankDepartures(const std::vector<double>& real, const EnsembleStats& stats,
                                       const FeatureLayout& layout, double threshold, std::size_t max_count)
 {

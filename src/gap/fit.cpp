@@ -467,6 +467,47 @@ void sinusoidFit(const Recording& r, int c, double f, double t0, double* amplitu
   *phase = std::atan2(b, a);
 }
 
+/// Frequency near f0 (within +-df) that maximises the least-squares sinusoid amplitude of the
+/// real recording minus the mean of the ensemble's (a motion common to the runs cancels).
+double refineFrequency(const Recording& r, const std::vector<Recording>* sims, int c, double f0, double df, double t0,
+                       double* amplitude, double* phase)
+{
+  double best_f = f0, best_a = -1, best_p = 0;
+  for (int i = -20; i <= 20; ++i)
+  {
+    const double f = f0 + df * i / 20.0;
+    if (f <= 0)
+    {
+      continue;
+    }
+    double a = 0, p = 0;
+    sinusoidFit(r, c, f, t0, &a, &p);
+    if (sims != nullptr && !sims->empty())
+    {
+      double sa = 0, sb = 0;
+      for (const auto& sr : *sims)
+      {
+        double aj = 0, pj = 0;
+        sinusoidFit(sr, c, f, t0, &aj, &pj);
+        sa += aj * std::cos(pj) / sims->size();
+        sb += aj * std::sin(pj) / sims->size();
+      }
+      const double ra = a * std::cos(p) - sa, rb = a * std::sin(p) - sb;
+      a = std::hypot(ra, rb);
+      p = std::atan2(rb, ra);
+    }
+    if (a > best_a)
+    {
+      best_a = a;
+      best_f = f;
+      best_p = p;
+    }
+  }
+  *amplitude = std::max(0.0, best_a);
+  *phase = best_p;
+  return best_f;
+}
+
 Candidate make(const std::string& name, std::vector<sim::EffectSpec> specs, const std::string& note)
 {
   Candidate c;
@@ -582,21 +623,76 @@ std::vector<Candidate> fitCandidates(const Recording& real_fit, const std::vecto
     }
   }
 
-  // bias_random_walk and bias_instability: Allan variance excess
+  // bias_random_walk and bias_instability: Allan variance excess. Short taus from the samples;
+  // long taus from 32 block means of (recording - ensemble mean of the other runs), which takes a
+  // motion common to the runs out of the long-tau Allan variance.
   if (!allan_m.empty())
   {
-    const std::size_t nt = allan_m.size();
-    std::vector<Vec> diff(kChannels, Vec(nt, 0.0)), simv(kChannels, Vec(nt, 0.0)), sims_sd(kChannels, Vec(nt, 0.0));
+    const int blocks = 32;
+    const std::size_t blen = n / blocks;
+    const double tb = blen / rate;
+    auto blockMeans = [&](const Recording& r) {
+      Eigen::MatrixXd bm(blocks, kChannels);
+      for (int k = 0; k < blocks; ++k)
+      {
+        bm.row(k) = r.data.middleRows(k * blen, blen).colwise().mean();
+      }
+      return bm;
+    };
+    const int M = static_cast<int>(sims_fit.size());
+    std::vector<Eigen::MatrixXd> sb(M);
+    Eigen::MatrixXd sum = Eigen::MatrixXd::Zero(blocks, kChannels);
+    for (int j = 0; j < M; ++j)
+    {
+      sb[j] = blockMeans(sims_fit[j]);
+      sum += sb[j];
+    }
+    const Eigen::MatrixXd rb = blockMeans(real_fit) - sum / M;
+    const std::vector<int> bm_m = { 1, 2, 4, 8 };
+    std::vector<Vec> tau(kChannels), diff(kChannels), simv(kChannels), sims_sd(kChannels);
     for (int c = 0; c < kChannels; ++c)
     {
-      for (std::size_t k = 0; k < nt; ++k)
+      for (std::size_t k = 0; k < allan_m.size(); ++k)
       {
-        const Cmp m = compare(R, S, [c, k](const FitStats& s) { return s.avar[c][k]; });
-        diff[c][k] = m.real - m.sim;
-        simv[c][k] = std::max(m.sim, 1e-300);
-        sims_sd[c][k] = m.spread;
+        const double t = allan_m[k] / rate;
+        if (t >= tb)
+        {
+          break;
+        }
+        const Cmp m = compare(R, S, [c, k](const FitStats& st) { return st.avar[c][k]; });
+        tau[c].push_back(t);
+        diff[c].push_back(m.real - m.sim);
+        simv[c].push_back(std::max(m.sim, 1e-300));
+        sims_sd[c].push_back(m.spread);
+      }
+      const Eigen::VectorXd rr = rb.col(c);
+      const Vec ar = allanDeviation(rr, bm_m);
+      std::vector<Vec> an(bm_m.size());
+      for (int j = 0; j < M; ++j)
+      {
+        const Eigen::VectorXd dj = sb[j].col(c) - (sum.col(c) - sb[j].col(c)) / std::max(1, M - 1);
+        const Vec a = allanDeviation(dj, bm_m);
+        for (std::size_t k = 0; k < bm_m.size(); ++k)
+        {
+          an[k].push_back(std::isfinite(a[k]) ? a[k] * a[k] : 0.0);
+        }
+      }
+      for (std::size_t k = 0; k < bm_m.size(); ++k)
+      {
+        if (!std::isfinite(ar[k]))
+        {
+          continue;
+        }
+        // (M - 1) / M: a leave-one-out residual carries more of the others' noise than the real one
+        const double null = meanOf(an[k]) * (M - 1.0) / M;
+        tau[c].push_back(bm_m[k] * tb);
+        diff[c].push_back(ar[k] * ar[k] - null);
+        simv[c].push_back(std::max(null, 1e-300));
+        sims_sd[c].push_back(stdOf(an[k]));
       }
     }
+    const std::size_t nt_dummy = 0;
+    (void)nt_dummy;
     // random walk from the longest 3 taus
     {
       Vec acc(3, 0.0), gyr(3, 0.0);
@@ -605,12 +701,13 @@ std::vector<Candidate> fitCandidates(const Recording& real_fit, const std::vecto
       {
         Vec k2;
         bool sig = false;
+        const std::size_t nt = tau[c].size();
         for (std::size_t k = nt >= 3 ? nt - 3 : 0; k < nt; ++k)
         {
-          const double tau = allan_m[k] / rate;
+          const double tau_k = tau[c][k];
           if (diff[c][k] > 0)
           {
-            k2.push_back(3.0 * diff[c][k] / tau);
+            k2.push_back(3.0 * diff[c][k] / tau_k);
           }
           sig = sig || (diff[c][k] > 4.0 * sims_sd[c][k] && diff[c][k] > 0.05 * simv[c][k]);
         }
@@ -641,7 +738,7 @@ std::vector<Candidate> fitCandidates(const Recording& real_fit, const std::vecto
       bool any = false;
       for (int c = 0; c < kChannels; ++c)
       {
-        for (std::size_t k = 0; k < nt; ++k)
+        for (std::size_t k = 0; k < tau[c].size(); ++k)
         {
           if (diff[c][k] > 4.0 * sims_sd[c][k] && diff[c][k] > 0.05 * simv[c][k])
           {
@@ -667,17 +764,17 @@ std::vector<Candidate> fitCandidates(const Recording& real_fit, const std::vecto
               continue;
             }
             double num = 0, den = 0;
-            for (std::size_t k = 0; k < nt; ++k)
+            for (std::size_t k = 0; k < tau[c].size(); ++k)
             {
-              const double g = gaussMarkovAllanVariance(allan_m[k] / rate, tc);
+              const double g = gaussMarkovAllanVariance(tau[c][k], tc);
               const double w = 1.0 / (simv[c][k] + std::max(diff[c][k], 0.0));
               num += diff[c][k] * g * w * w;
               den += g * g * w * w;
             }
             const double s2 = den > 0 ? std::max(0.0, num / den) : 0.0;
-            for (std::size_t k = 0; k < nt; ++k)
+            for (std::size_t k = 0; k < tau[c].size(); ++k)
             {
-              const double g = gaussMarkovAllanVariance(allan_m[k] / rate, tc);
+              const double g = gaussMarkovAllanVariance(tau[c][k], tc);
               const double w = 1.0 / (simv[c][k] + std::max(diff[c][k], 0.0));
               cost += std::pow((diff[c][k] - s2 * g) * w, 2);
             }
@@ -920,9 +1017,9 @@ std::vector<Candidate> fitCandidates(const Recording& real_fit, const std::vecto
         if (lines[c].power > 0 && lines[c].freq > 0)
         {
           double a = 0, p = 0;
-          sinusoidFit(real_fit, c, lines[c].freq, t0, &a, &p);
-          amp[c] = std::sqrt(2.0 * lines[c].power);
-          per[c] = 1.0 / lines[c].freq;
+          const double f = refineFrequency(real_fit, &sims_fit, c, lines[c].freq, R.psd_fine[c].df, t0, &a, &p);
+          amp[c] = std::min(a, std::sqrt(2.0 * lines[c].power) * 1.5);
+          per[c] = 1.0 / f;
           ph[c] = p;
           any = true;
         }
@@ -953,7 +1050,8 @@ std::vector<Candidate> fitCandidates(const Recording& real_fit, const std::vecto
       }
       if (cbest >= 0)
       {
-        const double f = lines[cbest].freq;
+        double a_ref = 0, ph_ref = 0;
+        const double f = refineFrequency(real_fit, &sims_fit, cbest, lines[cbest].freq, R.psd_fine[cbest].df, t0, &a_ref, &ph_ref);
         const std::size_t k0 = lines[cbest].bin;
         Vec amp(6, 0.0);
         for (int c = 0; c < kChannels; ++c)
@@ -969,7 +1067,10 @@ std::vector<Candidate> fitCandidates(const Recording& real_fit, const std::vecto
           }
           if (shows)
           {
-            amp[c] = std::sqrt(2.0 * pw);
+            double a_c = 0, ph_c = 0;
+            sinusoidFit(real_fit, c, f, t0, &a_c, &ph_c);
+            const double sign = std::cos(ph_c - ph_ref) >= 0 ? 1.0 : -1.0;
+            amp[c] = sign * std::min(a_c, 1.5 * std::sqrt(2.0 * pw));
           }
         }
         double a = 0, phase = 0;

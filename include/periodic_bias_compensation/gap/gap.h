@@ -154,6 +154,12 @@ std::vector<double> zScores(const std::vector<double>& features, const EnsembleS
 constexpr double kZThreshold = 3.0;
 double gapOf(const std::vector<double>& z);
 
+/// Gap of a candidate model: as gapOf(), plus kSpreadPenalty * max(0, ln(spread / base spread))
+/// per feature, so that a model cannot explain a departure merely by being vaguer (a log-score
+/// idea: a wider predictive spread costs its logarithm).
+constexpr double kSpreadPenalty = 0.3;
+double gapOf(const std::vector<double>& z, const std::vector<double>& spread, const std::vector<double>& base_spread);
+
 /// One departure of the real recording from the simulated ensemble.
 struct Departure
 {
@@ -191,7 +197,7 @@ struct Candidate
   std::string note;                            ///< how it was fitted
   double gap_before = 0.0;
   double gap_after = 0.0;
-  double shrink = 0.0;                         ///< 1 - after / before
+  double shrink = 0.0;  ///< (before - after) / (before - typical null gap), at most 1
   std::vector<double> z_after;                 ///< withheld z-scores with the effect
 };
 
@@ -221,6 +227,9 @@ struct Report
   EnsembleStats ens_held;
   double gap_before = 0.0;                     ///< withheld part, scenario as given
   double null_gap_held = 0.0;
+  double null_gap_typical = 0.0;               ///< median gap of one member vs the rest (shrink reference)
+  double max_z_held = 0.0;                     ///< largest |z| of the real withheld part
+  double null_max_z_held = 0.0;                ///< largest |z| of one member vs the rest
   std::vector<Candidate> ranking;              ///< best first
   std::vector<DirectDetection> direct;
   // verdict
