@@ -12,6 +12,12 @@ target_link_libraries(${PROJECT_NAME}_gap PUBLIC ${PROJECT_NAME}_sim Eigen3::Eig
 add_executable(validate_gap src/tools/validate_gap.cpp)
 target_link_libraries(validate_gap ${PROJECT_NAME}_gap)
 
+# diagnose_gap: a bag (rosbag C++ API) or a CSV against a scenario -> report.json/.md and plots.
+add_executable(diagnose_gap src/tools/diagnose_gap.cpp)
+target_include_directories(diagnose_gap PRIVATE include ${catkin_INCLUDE_DIRS})
+target_link_libraries(diagnose_gap ${PROJECT_NAME}_gap ${catkin_LIBRARIES})
+target_compile_definitions(diagnose_gap PRIVATE PBC_SOURCE_DIR="${CMAKE_CURRENT_SOURCE_DIR}")
+
 if(CATKIN_ENABLE_TESTING)
   # Issue 3: simulate_imu -> compensate_bag on every file of config/scenarios (60 s each).
   catkin_add_gtest(test_shipped_bags test/tools/test_shipped_bags.cpp)
@@ -22,4 +28,15 @@ if(CATKIN_ENABLE_TESTING)
     PBC_COMPENSATE_BAG="$<TARGET_FILE:compensate_bag>"
     PBC_SCENARIO_DIR="${CMAKE_CURRENT_SOURCE_DIR}/config/scenarios")
   add_dependencies(test_shipped_bags simulate_imu compensate_bag)
+
+  # Gap library units, diagnosis on simulated cases, validate_gap --small, the CLI on a bag and
+  # a CSV, and one real set when ../shared/data exists beside the repository (skipped otherwise).
+  catkin_add_gtest(test_gap test/gap/test_gap.cpp TIMEOUT 300)
+  target_link_libraries(test_gap ${PROJECT_NAME}_gap)
+  target_compile_definitions(test_gap PRIVATE
+    PBC_VALIDATE_GAP="$<TARGET_FILE:validate_gap>"
+    PBC_DIAGNOSE_GAP="$<TARGET_FILE:diagnose_gap>"
+    PBC_SIMULATE_IMU="$<TARGET_FILE:simulate_imu>"
+    PBC_SOURCE_DIR="${CMAKE_CURRENT_SOURCE_DIR}")
+  add_dependencies(test_gap validate_gap diagnose_gap simulate_imu)
 endif()

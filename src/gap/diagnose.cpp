@@ -308,7 +308,7 @@ Report diagnose(const Recording& real_in, const sim::Scenario& scenario_in, cons
   // Verdict.
   const double significant_gap = std::max(1.5 * rep.null_gap_held, 0.05);
   const bool significant = rep.gap_before > significant_gap ||
-                           rep.max_z_held > std::max(2.0 * rep.null_max_z_held, 2.0 * kZThreshold);
+                           rep.max_z_held > std::max(1.5 * rep.null_max_z_held, 2.0 * kZThreshold);
   if (!significant)
   {
     rep.verdict_effect = "no_gap";
@@ -336,7 +336,7 @@ Report diagnose(const Recording& real_in, const sim::Scenario& scenario_in, cons
         second = std::max(second, rep.ranking[i].shrink);
       }
     }
-    rep.best = &rep.ranking[0];
+    rep.best = 0;
     rep.verdict_effect = b.effect;
     rep.verdict_params = b.params_json;
     rep.shrink_withheld = b.shrink;
@@ -346,8 +346,9 @@ Report diagnose(const Recording& real_in, const sim::Scenario& scenario_in, cons
   }
   // Localised places of the withheld part, before and after the verdict.
   rep.where_held = rankDepartures(rep.real_held, rep.ens_held, rep.layout_held, kZThreshold, 12);
-  if (rep.best != nullptr)
+  if (rep.best >= 0)
   {
+    const Candidate* best = &rep.ranking[rep.best];
     for (const Departure& d : rep.where_held)
     {
       for (std::size_t i = 0; i < rep.layout_held.info.size(); ++i)
@@ -356,11 +357,132 @@ Report diagnose(const Recording& real_in, const sim::Scenario& scenario_in, cons
         if (f.channel == d.where.channel && f.quantity == d.where.quantity && f.range == d.where.range &&
             f.segment == d.where.segment)
         {
-          rep.where_held_after.push_back(rep.best->z_after.empty() ? 0.0 : rep.best->z_after[i]);
+          rep.where_held_after.push_back(best->z_after.empty() ? 0.0 : best->z_after[i]);
           break;
         }
       }
     }
+  }
+  // Curves for plots: PSD and Allan of the withheld part (real, ensemble median, ensemble with
+  // the verdict), block means of the whole recording (drift).
+  {
+    std::vector<sim::EffectSpec> specs;
+    if (rep.best >= 0)
+    {
+      specs = rep.ranking[rep.best].specs;
+    }
+    const sim::Scenario eff = withCandidate(scenario, specs);
+    const int nseg = welchSegment(real_held.size());
+    std::vector<int> ms;
+    for (int m = 1; static_cast<std::size_t>(m) * 10 <= real_held.size(); m *= 2)
+    {
+      ms.push_back(m);
+    }
+    const int blocks = 64;
+    struct Curves
+    {
+      std::vector<Psd> psd;
+      std::vector<std::vector<double>> adev;
+      Eigen::MatrixXd blocks;
+    };
+    auto curves = [&](const Recording& whole) {
+      Curves c;
+      const Recording held = sliceFraction(whole, opt.fit_fraction, 1.0);
+      for (int ch = 0; ch < kChannels; ++ch)
+      {
+        c.psd.push_back(welch(held.data.col(ch), real.rate, nseg));
+        c.adev.push_back(allanDeviation(held.data.col(ch), ms));
+      }
+      c.blocks.resize(blocks, kChannels);
+      const std::size_t bl = std::max<std::size_t>(1, whole.size() / blocks);
+      for (int b = 0; b < blocks; ++b)
+      {
+        const std::size_t a = std::min(whole.size() - 1, b * bl);
+        const std::size_t len = std::max<std::size_t>(1, std::min(bl, whole.size() - a));
+        c.blocks.row(b) = whole.data.middleRows(a, len).colwise().mean();
+      }
+      return c;
+    };
+    const Curves cr = curves(real);
+    std::vector<Curves> cb(M), ce(M);
+    parallelFor(2 * M, opt.threads, [&](int idx) {
+      const int i = idx % M;
+      if (idx < M)
+      {
+        Recording r = simulateRecording(scenario, seedOf(i));
+        r.rate = real.rate;
+        cb[i] = curves(r);
+      }
+      else
+      {
+        Recording r = simulateRecording(eff, seedOf(i));
+        r.rate = real.rate;
+        ce[i] = curves(r);
+      }
+    });
+    auto med = [](std::vector<double> v) {
+      std::sort(v.begin(), v.end());
+      return v.empty() ? 0.0 : v[v.size() / 2];
+    };
+    auto pct = [](std::vector<double> v, double p) {
+      std::sort(v.begin(), v.end());
+      return v.empty() ? 0.0 : v[static_cast<std::size_t>(p * (v.size() - 1) + 0.5)];
+    };
+    std::ostringstream ps, as, ds;
+    ps << "channel,f,real,sim,sim_effect\n";
+    as << "channel,tau,real,sim,sim_effect\n";
+    ds << "channel,t,real,sim_lo,sim_med,sim_hi,sim_effect_med\n";
+    for (int ch = 0; ch < kChannels; ++ch)
+    {
+      const std::string& name = channelNames()[ch];
+      for (std::size_t k = 1; k < cr.psd[ch].power.size(); ++k)
+      {
+        std::vector<double> vb, ve;
+        for (int i = 0; i < M; ++i)
+        {
+          vb.push_back(cb[i].psd[ch].power[k]);
+          ve.push_back(ce[i].psd[ch].power[k]);
+        }
+        ps << name << "," << num(k * cr.psd[ch].df) << "," << num(cr.psd[ch].power[k]) << "," << num(med(vb)) << ","
+           << num(med(ve)) << "\n";
+      }
+      for (std::size_t k = 0; k < ms.size(); ++k)
+      {
+        std::vector<double> vb, ve;
+        for (int i = 0; i < M; ++i)
+        {
+          vb.push_back(cb[i].adev[ch][k]);
+          ve.push_back(ce[i].adev[ch][k]);
+        }
+        as << name << "," << num(ms[k] / real.rate) << "," << num(cr.adev[ch][k]) << "," << num(med(vb)) << ","
+           << num(med(ve)) << "\n";
+      }
+      for (int b = 0; b < blocks; ++b)
+      {
+        std::vector<double> vb, ve;
+        for (int i = 0; i < M; ++i)
+        {
+          vb.push_back(cb[i].blocks(b, ch));
+          ve.push_back(ce[i].blocks(b, ch));
+        }
+        ds << name << "," << num((b + 0.5) * rep.duration / blocks) << "," << num(cr.blocks(b, ch)) << ","
+           << num(pct(vb, 0.0)) << "," << num(med(vb)) << "," << num(pct(vb, 1.0)) << "," << num(med(ve)) << "\n";
+      }
+    }
+    rep.psd_csv = ps.str();
+    rep.allan_csv = as.str();
+    rep.drift_csv = ds.str();
+    std::ostringstream fs;
+    fs << "index,channel,quantity,range,segment,lo,hi,real,sim,spread,z_before,z_after\n";
+    for (std::size_t i = 0; i < rep.layout_held.info.size(); ++i)
+    {
+      const FeatureInfo& f = rep.layout_held.info[i];
+      fs << i << "," << f.channel << "," << f.quantity << ",\"" << f.range << "\"," << f.segment << "," << num(f.lo) << ","
+         << num(f.hi) << "," << num(rep.real_held[i]) << "," << num(rep.ens_held.median[i]) << ","
+         << num(rep.ens_held.spread[i]) << "," << num(z_before[i]) << ","
+         << num(rep.best >= 0 && !rep.ranking[rep.best].z_after.empty() ? rep.ranking[rep.best].z_after[i] : z_before[i]) << "\n";
+    }
+    rep.features_csv = fs.str();
   }
   rep.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
   return rep;

@@ -52,7 +52,7 @@ FeatureLayout makeLayout(double rate, std::size_t n, bool orientation, bool temp
   L.temperature = temperature;
   const double df = rate / L.nseg;
   std::vector<double> edges{ rate / 2.0 };
-  while (edges.back() / std::sqrt(2.0) >= 2.0 * df)
+  while (edges.back() / std::sqrt(2.0) >= 0.99 * df)
   {
     edges.push_back(edges.back() / std::sqrt(2.0));
   }

@@ -909,9 +909,29 @@ std::vector<Candidate> fitCandidates(const Recording& real_fit, const std::vecto
           {
             continue;
           }
-          auto coupling = [&bins, s, i, j](const FitStats& st) {
+          // only where axis j's motion dominates axis i's own (ensemble mean), so that i's motion
+          // does not leak into the estimate
+          std::vector<std::size_t> own;
+          for (std::size_t k : bins)
+          {
+            double pjj = 0, pii = 0;
+            for (const auto& st : S)
+            {
+              pjj += st.cross[s][k](j, j);
+              pii += st.cross[s][k](i, i);
+            }
+            if (pjj > 10.0 * pii)
+            {
+              own.push_back(k);
+            }
+          }
+          if (own.empty())
+          {
+            continue;
+          }
+          auto coupling = [&own, s, i, j](const FitStats& st) {
             double num = 0, den = 0;
-            for (std::size_t k : bins)
+            for (std::size_t k : own)
             {
               num += st.cross[s][k](i, j);
               den += st.cross[s][k](j, j);

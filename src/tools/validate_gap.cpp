@@ -231,6 +231,10 @@ std::string undetectable(const std::string& effect, const std::string& motion)
       return "static: acts on gravity only, the same as a constant bias";
     }
   }
+  if (motion == "sea" && effect == "scale_factor")
+  {
+    return "random sea: the motion power differs from run to run by more than the scale error, and the gravity part is the same as a constant bias";
+  }
   return "";
 }
 

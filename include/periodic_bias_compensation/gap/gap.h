@@ -179,7 +179,7 @@ std::vector<Departure> rankDepartures(const std::vector<double>& real, const Ens
 
 struct DiagnoseOptions
 {
-  int ensemble = 6;              ///< simulated runs per model (seeds 1..ensemble)
+  int ensemble = 8;              ///< simulated runs per model
   double fit_fraction = 0.6;     ///< the fit sees [0, fit_fraction), the gap is measured after
   int threads = 2;
   double min_shrink = 0.3;       ///< below: "no candidate explains the gap"
@@ -238,11 +238,16 @@ struct Report
   double confidence = 0.0;
   double shrink_withheld = 0.0;
   std::string verdict_text;
-  const Candidate* best = nullptr;
+  int best = -1;                               ///< index of the verdict in ranking, -1 for none
   // localised places: top departures of the withheld part, before and after the verdict
   std::vector<Departure> where_held;
   std::vector<double> where_held_after;
   double seconds = 0.0;                        ///< wall time
+  // Curves for plots (CSV text): withheld part, real vs ensemble median vs ensemble with the verdict.
+  std::string psd_csv;    ///< channel,f,real,sim,sim_effect
+  std::string allan_csv;  ///< channel,tau,real,sim,sim_effect
+  std::string drift_csv;  ///< channel,t,real,sim_lo,sim_med,sim_hi,sim_effect_med (block means, whole recording)
+  std::string features_csv;  ///< index,channel,quantity,range,segment,real,sim,spread,z_before,z_after
   std::vector<std::vector<double>> ens_held_members;  ///< for plots
 };
 

@@ -1,0 +1,489 @@
+// diagnose_gap: where the sim-to-real gap lies, which unmodelled effect causes it, and how far it
+// shrinks once that effect is added (measured on the withheld part of the recording).
+//
+//   diagnose_gap --real REAL.bag --sim SCENARIO.yaml --out DIR [--imu-topic imu/data]
+//                [--truth-topic ground_truth/odometry] [--temperature-topic imu/temperature]
+//   diagnose_gap --real-csv FILE --columns t=COL,ax=COL,ay=COL,az=COL,gx=COL,gy=COL,gz=COL
+//                [--accel-scale K] [--gyro-scale K] [--time-scale K] [--rate HZ] [--skip-lines N]
+//                --sim SCENARIO.yaml --out DIR
+//   common: [--ensemble N] [--fit-fraction F] [--threads N] [--no-plots] [--max-duration S]
+//
+// COL is a column name of the CSV header or a 0-based index, optionally prefixed with '-' to
+// negate it; without a t column the time is k / rate. Scales convert to SI (e.g. --accel-scale
+// 9.80665 for g, --gyro-scale 0.0174532925 for deg/s). Writes DIR/report.json, DIR/report.md,
+// DIR/*.csv and (with python3-matplotlib) DIR/*.png; prints a one-screen summary.
+// Exit status: 0 done, 1 error, 2 wrong command line.
+#include <sys/stat.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <map>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <rosbag/bag.h>
+#include <rosbag/view.h>
+#include <sensor_msgs/Imu.h>
+#include <sensor_msgs/Temperature.h>
+
+#include "periodic_bias_compensation/gap/gap.h"
+#include "periodic_bias_compensation/sim/scenario.h"
+
+namespace fs = std::filesystem;
+namespace gap = periodic_bias_compensation::gap;
+namespace sim = periodic_bias_compensation::sim;
+
+namespace
+{
+const char* const kUsage =
+    "usage: diagnose_gap (--real REAL.bag | --real-csv FILE --columns t=C,ax=C,...,gz=C) --sim SCENARIO.yaml --out DIR\n"
+    "         [--imu-topic imu/data] [--truth-topic ground_truth/odometry] [--temperature-topic imu/temperature]\n"
+    "         [--accel-scale K] [--gyro-scale K] [--time-scale K] [--rate HZ] [--skip-lines N]\n"
+    "         [--ensemble N] [--fit-fraction F] [--threads N] [--max-duration S] [--no-plots]\n";
+
+struct UsageError : std::runtime_error
+{
+  using std::runtime_error::runtime_error;
+};
+
+struct Options
+{
+  std::string real, real_csv, columns, scenario, out;
+  std::string imu_topic = "imu/data";
+  std::string truth_topic = "ground_truth/odometry";
+  std::string temperature_topic = "imu/temperature";
+  double accel_scale = 1.0, gyro_scale = 1.0, time_scale = 1.0, rate = 0.0, max_duration = 0.0;
+  int skip_lines = 0;
+  bool plots = true;
+  gap::DiagnoseOptions diag;
+};
+
+std::string absoluteTopic(const std::string& t)
+{
+  return (!t.empty() && t.front() == '/') ? t : "/" + t;
+}
+
+gap::Recording readBag(const Options& o)
+{
+  rosbag::Bag bag(o.real, rosbag::bagmode::Read);
+  gap::Recording r;
+  r.source = o.real;
+  std::vector<std::array<double, 6>> rows;
+  std::vector<std::pair<double, double>> temps;
+  bool orientation_ok = true;
+  const std::string imu = absoluteTopic(o.imu_topic), temp = absoluteTopic(o.temperature_topic);
+  rosbag::View view(bag);
+  for (const rosbag::MessageInstance& m : view)
+  {
+    const std::string topic = absoluteTopic(m.getTopic());
+    if (topic == imu)
+    {
+      const auto msg = m.instantiate<sensor_msgs::Imu>();
+      if (!msg)
+      {
+        throw std::runtime_error("topic " + o.imu_topic + " is not sensor_msgs/Imu");
+      }
+      r.stamp.push_back(msg->header.stamp.toSec());
+      rows.push_back({ msg->linear_acceleration.x, msg->linear_acceleration.y, msg->linear_acceleration.z,
+                       msg->angular_velocity.x, msg->angular_velocity.y, msg->angular_velocity.z });
+      const auto& q = msg->orientation;
+      const double norm = std::sqrt(q.w * q.w + q.x * q.x + q.y * q.y + q.z * q.z);
+      orientation_ok = orientation_ok && msg->orientation_covariance[0] >= 0 && std::abs(norm - 1.0) < 1e-3;
+      r.orientation.emplace_back(q.w, q.x, q.y, q.z);
+    }
+    else if (topic == temp)
+    {
+      const auto msg = m.instantiate<sensor_msgs::Temperature>();
+      if (msg)
+      {
+        temps.push_back({ msg->header.stamp.toSec(), msg->temperature });
+      }
+    }
+  }
+  if (rows.empty())
+  {
+    throw std::runtime_error("no messages on " + o.imu_topic + " in " + o.real);
+  }
+  r.data.resize(rows.size(), gap::kChannels);
+  for (std::size_t i = 0; i < rows.size(); ++i)
+  {
+    for (int c = 0; c < gap::kChannels; ++c)
+    {
+      r.data(i, c) = rows[i][c];
+    }
+  }
+  r.has_orientation = orientation_ok;
+  if (!orientation_ok)
+  {
+    r.orientation.clear();
+  }
+  if (!temps.empty())
+  {
+    std::sort(temps.begin(), temps.end());
+    r.has_temperature = true;
+    std::size_t j = 0;
+    for (double t : r.stamp)
+    {
+      while (j + 1 < temps.size() && temps[j + 1].first <= t)
+      {
+        ++j;
+      }
+      r.temperature.push_back(temps[j].second);
+    }
+  }
+  return r;
+}
+
+std::vector<std::string> split(const std::string& s, char sep)
+{
+  std::vector<std::string> out;
+  std::string cur;
+  bool quoted = false;
+  for (char c : s)
+  {
+    if (c == '"')
+    {
+      quoted = !quoted;
+    }
+    else if (c == sep && !quoted)
+    {
+      out.push_back(cur);
+      cur.clear();
+    }
+    else if (c != '\r')
+    {
+      cur += c;
+    }
+  }
+  out.push_back(cur);
+  return out;
+}
+
+std::string trim(const std::string& s)
+{
+  const auto a = s.find_first_not_of(" \t");
+  const auto b = s.find_last_not_of(" \t");
+  return a == std::string::npos ? "" : s.substr(a, b - a + 1);
+}
+
+gap::Recording readCsv(const Options& o)
+{
+  std::ifstream in(o.real_csv);
+  if (!in)
+  {
+    throw std::runtime_error("cannot read " + o.real_csv);
+  }
+  std::string line;
+  for (int i = 0; i < o.skip_lines && std::getline(in, line); ++i)
+  {
+  }
+  if (!std::getline(in, line))
+  {
+    throw std::runtime_error(o.real_csv + ": no header line");
+  }
+  const std::vector<std::string> header = split(line, ',');
+  std::map<std::string, std::pair<int, double>> col;  // key -> column, sign
+  for (const std::string& item : split(o.columns, ','))
+  {
+    const auto eq = item.find('=');
+    if (eq == std::string::npos)
+    {
+      throw UsageError("--columns item '" + item + "' is not key=column");
+    }
+    const std::string key = trim(item.substr(0, eq));
+    std::string name = trim(item.substr(eq + 1));
+    double sign = 1.0;
+    if (!name.empty() && name[0] == '-')
+    {
+      sign = -1.0;
+      name = name.substr(1);
+    }
+    int index = -1;
+    for (std::size_t i = 0; i < header.size(); ++i)
+    {
+      if (trim(header[i]) == name)
+      {
+        index = static_cast<int>(i);
+      }
+    }
+    if (index < 0 && !name.empty() && std::all_of(name.begin(), name.end(), ::isdigit))
+    {
+      index = std::stoi(name);
+    }
+    if (index < 0)
+    {
+      throw UsageError("--columns: no column '" + name + "' in " + o.real_csv);
+    }
+    col[key] = { index, sign };
+  }
+  const char* keys[6] = { "ax", "ay", "az", "gx", "gy", "gz" };
+  for (const char* k : keys)
+  {
+    if (!col.count(k))
+    {
+      throw UsageError(std::string("--columns needs ") + k);
+    }
+  }
+  const bool has_t = col.count("t") > 0;
+  if (!has_t && o.rate <= 0)
+  {
+    throw UsageError("without a t column, --rate is required");
+  }
+  gap::Recording r;
+  r.source = o.real_csv;
+  std::vector<std::array<double, 6>> rows;
+  std::vector<double> temps;
+  const bool has_temp = col.count("temp") > 0;
+  std::size_t k = 0;
+  while (std::getline(in, line))
+  {
+    const std::vector<std::string> f = split(line, ',');
+    try
+    {
+      std::array<double, 6> v;
+      for (int c = 0; c < 6; ++c)
+      {
+        const auto& [idx, sign] = col[keys[c]];
+        v[c] = sign * std::stod(f.at(idx)) * (c < 3 ? o.accel_scale : o.gyro_scale);
+      }
+      const double t = has_t ? std::stod(f.at(col["t"].first)) * o.time_scale : k / o.rate;
+      double tv = 0.0;
+      if (has_temp)
+      {
+        tv = std::stod(f.at(col["temp"].first));
+      }
+      bool finite = std::isfinite(t);
+      for (double a : v)
+      {
+        finite = finite && std::isfinite(a);
+      }
+      if (!finite)
+      {
+        continue;
+      }
+      rows.push_back(v);
+      r.stamp.push_back(t);
+      temps.push_back(tv);
+      ++k;
+    }
+    catch (const std::exception&)
+    {
+      continue;  // not a data line
+    }
+  }
+  if (rows.size() < 200)
+  {
+    throw std::runtime_error(o.real_csv + ": only " + std::to_string(rows.size()) + " data lines");
+  }
+  r.data.resize(rows.size(), gap::kChannels);
+  for (std::size_t i = 0; i < rows.size(); ++i)
+  {
+    for (int c = 0; c < 6; ++c)
+    {
+      r.data(i, c) = rows[i][c];
+    }
+  }
+  if (has_temp)
+  {
+    r.has_temperature = true;
+    r.temperature = temps;
+  }
+  if (o.rate > 0)
+  {
+    r.rate = o.rate;
+  }
+  return r;
+}
+
+/// Stamps shifted so that the first is 1000 s (the simulator's start), rate fixed.
+void normalise(gap::Recording* r, double max_duration)
+{
+  const double t0 = r->stamp.front();
+  for (double& t : r->stamp)
+  {
+    t = t - t0 + 1000.0;
+  }
+  if (max_duration > 0)
+  {
+    std::size_t n = 0;
+    while (n < r->size() && r->stamp[n] - 1000.0 < max_duration)
+    {
+      ++n;
+    }
+    r->stamp.resize(n);
+    r->data.conservativeResize(n, gap::kChannels);
+    if (r->has_orientation)
+    {
+      r->orientation.resize(n);
+    }
+    if (r->has_temperature)
+    {
+      r->temperature.resize(n);
+    }
+  }
+  if (r->rate <= 0)
+  {
+    r->rate = gap::estimateRate(*r);
+  }
+}
+
+std::string reportMarkdown(const gap::Report& rep, const Options& o, bool plots)
+{
+  std::ostringstream md;
+  char buf[512];
+  md << "# Sim-to-real gap: " << rep.real_source << " vs " << o.scenario << "\n\n";
+  std::snprintf(buf, sizeof(buf), "%zu samples, %.6g Hz, %.1f s; ensemble of %d simulated runs; the fit saw the first %.0f %%, the gap is measured on the last %.0f %%. Wall time %.1f s.\n\n",
+                rep.samples, rep.rate, rep.duration, o.diag.ensemble, 100 * o.diag.fit_fraction,
+                100 * (1 - o.diag.fit_fraction), rep.seconds);
+  md << buf;
+  md << "## Verdict\n\n**" << rep.verdict_effect << "** (confidence " << rep.confidence << ", shrink on the withheld part "
+     << static_cast<int>(std::lround(100 * rep.shrink_withheld)) << " %): " << rep.verdict_text << "\n\nparams: `"
+     << rep.verdict_params << "`\n\n";
+  md << "## 1. Where (whole recording)\n\n";
+  std::snprintf(buf, sizeof(buf), "gap %.3g; one ensemble member against the others: up to %.3g. Departures (|z| > 3), largest first:\n\n", rep.gap_all, rep.null_gap);
+  md << buf << "| axis | quantity | band / tau | segment | stage | real | sim (median) | z |\n|---|---|---|---|---|---|---|---|\n";
+  for (const auto& d : rep.where)
+  {
+    std::snprintf(buf, sizeof(buf), "| %s | %s | %s | %s | %s | %.5g | %.5g | %+.3g |\n", d.where.channel.c_str(),
+                  d.where.quantity.c_str(), d.where.range.c_str(), d.where.segment.c_str(), d.where.stage.c_str(), d.real,
+                  d.sim_median, d.z);
+    md << buf;
+  }
+  md << "\nDirectly visible effects:\n\n";
+  for (const auto& d : rep.direct)
+  {
+    md << "- " << d.effect << ": " << (d.detected ? "**yes**" : "no") << " (" << d.evidence << ")\n";
+  }
+  if (plots)
+  {
+    md << "\n![gap heat map](heatmap.png)\n\n![drift](drift.png)\n";
+  }
+  md << "\n## 2. Which effect (fit on the first part, judged on the withheld part)\n\n";
+  std::snprintf(buf, sizeof(buf), "Gap of the scenario as given on the withheld part: %.3g (typical member vs the rest: %.3g).\n\n",
+                rep.gap_before, rep.null_gap_typical);
+  md << buf << "| rank | effect | gap before | gap after | shrink | fitted parameters |\n|---|---|---|---|---|---|\n";
+  for (std::size_t i = 0; i < rep.ranking.size(); ++i)
+  {
+    const auto& c = rep.ranking[i];
+    std::snprintf(buf, sizeof(buf), "| %zu | %s | %.3g | %.3g | %.0f %% | `", i + 1, c.effect.c_str(), c.gap_before,
+                  c.gap_after, 100 * c.shrink);
+    md << buf << c.params_json << "` |\n";
+  }
+  md << "\n## 3. How far it shrinks (withheld part, the places of largest departure)\n\n";
+  md << "| axis | quantity | band / tau | segment | z before | z after |\n|---|---|---|---|---|---|\n";
+  for (std::size_t i = 0; i < rep.where_held.size(); ++i)
+  {
+    const auto& d = rep.where_held[i];
+    std::snprintf(buf, sizeof(buf), "| %s | %s | %s | %s | %+.3g | %s |\n", d.where.channel.c_str(), d.where.quantity.c_str(),
+                  d.where.range.c_str(), d.where.segment.c_str(), d.z,
+                  i < rep.where_held_after.size() ? std::to_string(rep.where_held_after[i]).c_str() : "-");
+    md << buf;
+  }
+  if (plots)
+  {
+    md << "\n![spectra](spectra.png)\n\n![allan](allan.png)\n";
+  }
+  md << "\nMethod and limits: docs/gap.md of periodic_bias_compensation.\n";
+  return md.str();
+}
+}  // namespace
+
+int main(int argc, char** argv)
+{
+  Options o;
+  try
+  {
+    for (int i = 1; i < argc; ++i)
+    {
+      const std::string a = argv[i];
+      auto value = [&]() -> std::string {
+        if (i + 1 >= argc)
+        {
+          throw UsageError("missing value after " + a);
+        }
+        return argv[++i];
+      };
+      if (a == "-h" || a == "--help")
+      {
+        std::cout << kUsage;
+        return 0;
+      }
+      else if (a == "--real") o.real = value();
+      else if (a == "--real-csv") o.real_csv = value();
+      else if (a == "--columns") o.columns = value();
+      else if (a == "--sim") o.scenario = value();
+      else if (a == "--out") o.out = value();
+      else if (a == "--imu-topic") o.imu_topic = value();
+      else if (a == "--truth-topic") o.truth_topic = value();
+      else if (a == "--temperature-topic") o.temperature_topic = value();
+      else if (a == "--accel-scale") o.accel_scale = std::stod(value());
+      else if (a == "--gyro-scale") o.gyro_scale = std::stod(value());
+      else if (a == "--time-scale") o.time_scale = std::stod(value());
+      else if (a == "--rate") o.rate = std::stod(value());
+      else if (a == "--skip-lines") o.skip_lines = std::stoi(value());
+      else if (a == "--ensemble") o.diag.ensemble = std::stoi(value());
+      else if (a == "--fit-fraction") o.diag.fit_fraction = std::stod(value());
+      else if (a == "--threads") o.diag.threads = std::stoi(value());
+      else if (a == "--max-duration") o.max_duration = std::stod(value());
+      else if (a == "--no-plots") o.plots = false;
+      else throw UsageError("unknown argument '" + a + "'");
+    }
+    if ((o.real.empty() == o.real_csv.empty()) || o.scenario.empty() || o.out.empty())
+    {
+      throw UsageError("one of --real / --real-csv, and --sim and --out are required");
+    }
+    if (!o.real_csv.empty() && o.columns.empty())
+    {
+      throw UsageError("--real-csv needs --columns");
+    }
+    if (o.diag.fit_fraction <= 0.1 || o.diag.fit_fraction >= 0.9)
+    {
+      throw UsageError("--fit-fraction must be in (0.1, 0.9)");
+    }
+  }
+  catch (const std::exception& e)
+  {
+    std::cerr << "diagnose_gap: " << e.what() << "\n" << kUsage;
+    return 2;
+  }
+  try
+  {
+    const sim::Scenario scenario = sim::loadScenario(o.scenario);
+    gap::Recording real = o.real.empty() ? readCsv(o) : readBag(o);
+    normalise(&real, o.max_duration);
+    const gap::Report rep = gap::diagnose(real, scenario, o.diag);
+    fs::create_directories(o.out);
+    std::ofstream(o.out + "/report.json") << gap::reportJson(rep);
+    std::ofstream(o.out + "/psd.csv") << rep.psd_csv;
+    std::ofstream(o.out + "/allan.csv") << rep.allan_csv;
+    std::ofstream(o.out + "/drift.csv") << rep.drift_csv;
+    std::ofstream(o.out + "/features.csv") << rep.features_csv;
+    bool plots = false;
+    if (o.plots)
+    {
+      const std::string script = std::string(PBC_SOURCE_DIR) + "/scripts/gap_plots.py";
+      const std::string cmd = "/usr/bin/python3 '" + script + "' --dir '" + o.out + "' --title '" +
+                              fs::path(rep.real_source).filename().string() + " vs " + rep.scenario_name + ": " +
+                              rep.verdict_effect + "' > /dev/null 2>&1";
+      plots = std::system(cmd.c_str()) == 0;
+      if (!plots)
+      {
+        std::cerr << "diagnose_gap: plots not made (" << script << " with python3-matplotlib)\n";
+      }
+    }
+    std::ofstream(o.out + "/report.md") << reportMarkdown(rep, o, plots);
+    std::cout << gap::reportSummary(rep) << "report: " << o.out << "/report.md, " << o.out << "/report.json\n";
+  }
+  catch (const std::exception& e)
+  {
+    std::cerr << "diagnose_gap: " << e.what() << "\n";
+    return 1;
+  }
+  return 0;
+}
