@@ -83,4 +83,22 @@ if(CATKIN_ENABLE_TESTING)
     PBC_SOURCE_DIR="${CMAKE_CURRENT_SOURCE_DIR}")
   add_dependencies(test_compensate_bag compensate_bag ${PROJECT_NAME}_test_bags
     ${PROJECT_NAME}_generate_messages_cpp)
+
+  # Reliability of the core (issue 6, docs/reliability.md), no master: gains refused while data
+  # flows, orientation lost, constant/noise input, Unix-time stamps, a 3 h run at 100 Hz
+  # (PBC_LONG_RUN_HOURS=24 for the measured 24 h run).
+  catkin_add_gtest(test_reliability test/ros/reliability_test.cpp)
+  target_link_libraries(test_reliability ${PROJECT_NAME}_core ${PROJECT_NAME}_sim)
+  target_compile_definitions(test_reliability PRIVATE
+    PBC_SCENARIO_DIR="${CMAKE_CURRENT_SOURCE_DIR}/config/scenarios")
+
+  # Run-time faults while data flows, each seen in /diagnostics (issue 6).
+  add_rostest_gtest(test_faults test/ros/faults.test test/ros/faults.cpp)
+  target_link_libraries(test_faults ${catkin_LIBRARIES})
+  add_dependencies(test_faults ${PROJECT_NAME}_nodelet ${PROJECT_NAME}_generate_messages_cpp ${PROJECT_NAME}_gencfg)
+
+  # The nodelet manager killed and respawned while data flows.
+  add_rostest_gtest(test_manager_restart test/ros/manager_restart.test test/ros/manager_restart.cpp)
+  target_link_libraries(test_manager_restart ${catkin_LIBRARIES})
+  add_dependencies(test_manager_restart ${PROJECT_NAME}_nodelet ${PROJECT_NAME}_generate_messages_cpp)
 endif()

@@ -125,7 +125,17 @@ CompensatorRos::CompensatorRos(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh
     if (fileExists(calibration_file))
     {
       Vector3 bias;
-      if (!loadCalibration(calibration_file, &bias, &why))
+      bool loaded = false;
+      try
+      {
+        loaded = loadCalibration(calibration_file, &bias, &why);
+      }
+      catch (const std::exception& e)
+      {
+        // Some malformed files make the YAML parser throw instead of returning false.
+        why = "'" + calibration_file + "' is not a calibration file (" + e.what() + ")";
+      }
+      if (!loaded)
       {
         throw std::runtime_error("parameter 'calibration_file': " + why);
       }
@@ -208,8 +218,25 @@ void CompensatorRos::imuCallback(const sensor_msgs::Imu::ConstPtr& msg)
   }
 
   const ImuSample sample = toImuSample(*msg, mounting_);
+  if (!plausible(sample))
+  {
+    ++counters_.rejected_out_of_range;
+    ROS_WARN_THROTTLE(kWarnPeriod, "imu/data: sample at t = %.3f s dropped: acceleration or angular rate out of range "
+                                   "(|a| > %.0f m/s^2 or |w| > %.0f rad/s)",
+                      sample.t, kMaxSpecificForce, kMaxAngularRate);
+    return;
+  }
   CompensatorOutput out;
   const SampleStatus status = compensator_->addSample(sample, &out);
+  if (status == SampleStatus::kAccepted || status == SampleStatus::kGapReset || status == SampleStatus::kResetBackwards)
+  {
+    has_orientation_ = sample.has_orientation;
+    seen_orientation_ = seen_orientation_ || sample.has_orientation;
+    if (!sample.has_orientation)
+    {
+      ++counters_.without_orientation;
+    }
+  }
   switch (status)
   {
     case SampleStatus::kAccepted:
@@ -316,9 +343,9 @@ void CompensatorRos::publishOutputs(const sensor_msgs::Imu& msg, const Compensat
   }
   has_output_ = true;
   last_output_ = out;
-  // Raw track: acceleration_level is the core's gravity-free level acceleration with its
-  // constant-bias estimate removed (CompensatorOutput), integrated twice here.
-  raw_.add(out.t, out.acceleration_level, status == SampleStatus::kGapReset);
+  // Raw track: the gravity-free level acceleration with only the calibrated constant bias
+  // removed (CompensatorOutput::acceleration_constant_compensated), integrated twice here.
+  raw_.add(out.t, out.acceleration_constant_compensated, status == SampleStatus::kGapReset);
   appendPaths(stamp, out);
 }
 
@@ -375,6 +402,8 @@ void CompensatorRos::reconfigure(TuningConfig& config, uint32_t /*level*/)
   if (!applyTuning(config, &next, &why) || !compensator_->setConfig(next, &why))
   {
     ROS_ERROR("reconfigure refused, keeping the previous parameters: %s", why.c_str());
+    ++counters_.refused_reconfigures;
+    last_refusal_ = why;
     // The server stores and returns the config it handed us: writing the running values back
     // makes the client see the refusal (the same effect as updateConfig, without re-entering).
     toTuning(compensator_->config(), &config);
@@ -495,6 +524,8 @@ void CompensatorRos::diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat)
   count(since(core.rejected_bad_quaternion, diag_core_prev_.rejected_bad_quaternion), "bad quaternion");
   count(since(core.rejected_duplicate, diag_core_prev_.rejected_duplicate), "duplicate stamp");
   count(since(counters_.rejected_wrong_frame, diag_wrapper_prev_.rejected_wrong_frame), "wrong frame_id");
+  count(since(counters_.rejected_out_of_range, diag_wrapper_prev_.rejected_out_of_range),
+        "acceleration or angular rate out of range");
   if (!rejected.empty())
   {
     std::string joined = "samples dropped: ";
@@ -516,6 +547,15 @@ void CompensatorRos::diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat)
   {
     raise(DiagnosticStatus::WARN, "IMU sample rate changed: period search restarted");
   }
+  if (since(counters_.refused_reconfigures, diag_wrapper_prev_.refused_reconfigures) > 0)
+  {
+    raise(DiagnosticStatus::WARN, "reconfigure refused, previous parameters kept: " + last_refusal_);
+  }
+  if (seen_orientation_ && !has_orientation_ && counters_.received > 0)
+  {
+    raise(DiagnosticStatus::WARN, "IMU orientation missing: levelling with the gravity direction measured at "
+                                  "start (roll and pitch of the hull leak into the level axes)");
+  }
   if (mounting_state_ == MountingState::kFallback)
   {
     raise(DiagnosticStatus::WARN, "no transform " + frame_filter_.expected() + " -> " + params_.ros.base_frame +
@@ -525,9 +565,16 @@ void CompensatorRos::diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat)
   {
     raise(DiagnosticStatus::WARN, "calibrating constant bias");
   }
+  // Period search: "no period" is normal on a calm sea, constant or pure-noise input (a lock
+  // needs a peak min_peak_ratio times the median of the band); shown, not an error.
+  bool any_locked = false;
+  for (int i = 0; i < 3; ++i)
+  {
+    any_locked = any_locked || (has_output_ && last_output_.axes[i].locked);
+  }
   if (messages.empty())
   {
-    messages.push_back("compensating");
+    messages.push_back(any_locked ? "compensating" : "compensating; no period (no dominant wave period found)");
   }
   std::string summary;
   for (std::size_t i = 0; i < messages.size(); ++i)
@@ -553,6 +600,16 @@ void CompensatorRos::diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat)
   stat.add("gap resets", core.gap_resets);
   stat.add("sample rate changes", core.rate_changes);
   stat.add("non-finite outputs suppressed", counters_.nonfinite_outputs);
+  stat.add("rejected out of range", counters_.rejected_out_of_range);
+  stat.add("accepted without orientation", counters_.without_orientation);
+  stat.add("orientation", !seen_orientation_ ? std::string("none in the input: levelled with gravity")
+                                             : (has_orientation_ ? std::string("from the IMU message")
+                                                                 : std::string("missing: levelled with gravity")));
+  stat.add("refused reconfigures", counters_.refused_reconfigures);
+  if (!last_refusal_.empty())
+  {
+    stat.add("last refused reconfigure", last_refusal_);
+  }
   const char* mounting_names[] = { "waiting for tf", "from tf", "identity (imu frame is base frame)",
                                    "identity (tf lookup failed)" };
   stat.add("mounting", mounting_names[static_cast<int>(mounting_state_)]);
@@ -569,7 +626,7 @@ void CompensatorRos::diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat)
     }
     else
     {
-      stat.add(key, "not locked");
+      stat.add(key, "no period");
     }
   }
 

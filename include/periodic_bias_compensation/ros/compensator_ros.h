@@ -51,6 +51,9 @@ private:
     std::uint64_t rejected_wrong_frame = 0;   ///< frame_id differs from the expected one
     std::uint64_t waiting_for_mounting = 0;   ///< dropped while waiting for imu -> base tf
     std::uint64_t nonfinite_outputs = 0;      ///< outputs not published because not finite
+    std::uint64_t rejected_out_of_range = 0;  ///< finite but implausible force/rate (plausible())
+    std::uint64_t without_orientation = 0;    ///< accepted messages that carried no orientation
+    std::uint64_t refused_reconfigures = 0;   ///< dynamic_reconfigure requests refused
   };
 
   enum class MountingState
@@ -113,6 +116,9 @@ private:
   bool has_output_ = false;
   CompensatorOutput last_output_;
   ros::Time last_receive_;  ///< ROS time of the last message on imu/data
+  bool seen_orientation_ = false;  ///< some message carried an orientation
+  bool has_orientation_ = false;   ///< the last accepted message carried one
+  std::string last_refusal_;       ///< why the last reconfigure request was refused
 
   std::unique_ptr<diagnostic_updater::Updater> updater_;
   ros::Timer diagnostic_timer_;
