@@ -313,7 +313,6 @@ struct AxisEstimator
   std::unique_ptr<FrequencyTracker> tracker;
   bool locked = false;
   double frequency = 0.0;
-  double amplitude = 0.0;
 
   // Default mode: harmonic tracker + third-order drift observer.
   HarmonicEstimator harmonic;
@@ -445,6 +444,7 @@ public:
     rate_ = 0.0;
     counters_.sample_rate = 0.0;
     has_level_ = false;
+    level_calibrated_ = false;
     calibration_buffer_.clear();
     if (!bias_from_file_)
     {
@@ -560,7 +560,6 @@ private:
         axis.tracker->clear();
       axis.locked = false;
       axis.frequency = 0.0;
-      axis.amplitude = 0.0;
       axis.harmonic.reset(config_.harmonics);
       axis.phase = 0.0;
       axis.frequency_history.clear();
@@ -629,7 +628,6 @@ private:
       {
         axes_[i].locked = true;
         axes_[i].frequency = window_frequency[i].frequency;
-        axes_[i].amplitude = window_frequency[i].amplitude;
       }
     for (const auto& b : calibration_buffer_)
       *out = process(b.sample, b.dt);
@@ -748,7 +746,6 @@ private:
     }
     axis.locked = true;
     axis.frequency = estimate.frequency;
-    axis.amplitude = estimate.amplitude;
     axis.frequency_time = now_ - 0.5 * axis.tracker->samples() / rate_;
     // Only full windows: while it fills, the interpolation bias changes with the data length and
     // would read as a drift.
