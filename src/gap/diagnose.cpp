@@ -90,6 +90,11 @@ bool equivalent(const std::string& a, const std::string& b)
 }
 }  // namespace
 
+sim::Scenario applyCandidate(const sim::Scenario& scenario, const Candidate& candidate)
+{
+  return withCandidate(scenario, candidate.specs);
+}
+
 Report diagnose(const Recording& real_in, const sim::Scenario& scenario_in, const DiagnoseOptions& opt)
 {
   const auto wall0 = std::chrono::steady_clock::now();

@@ -214,7 +214,7 @@ TEST(GapRealData, AdisStaticAgainstAPlausibleScenario)
   }
   const std::string dir = tempDir();
   const CommandResult r = shell(std::string(PBC_DIAGNOSE_GAP) + " --real-csv " + data.string() +
-                                " --columns t=t_s,ax=acc_x_g,ay=acc_y_g,az=acc_z_g,gx=gyro_x_dps,gy=gyro_y_dps,gz=gyro_z_dps"
+                                " --columns t=t_s,ax=acc_x_g,ay=-acc_y_g,az=-acc_z_g,gx=gyro_x_dps,gy=-gyro_y_dps,gz=-gyro_z_dps"
                                 " --accel-scale 9.80665 --gyro-scale 0.017453292519943295 --sim " +
                                 std::string(PBC_SOURCE_DIR) + "/config/scenarios/gap_adis16405_static.yaml --out " + dir +
                                 " --no-plots");

@@ -254,6 +254,9 @@ struct Report
 /// Full diagnosis of a real recording against a scenario.
 Report diagnose(const Recording& real, const sim::Scenario& scenario, const DiagnoseOptions& options);
 
+/// The scenario with a candidate's effects in place of those of the same name.
+sim::Scenario applyCandidate(const sim::Scenario& scenario, const Candidate& candidate);
+
 /// report.json text.
 std::string reportJson(const Report& report);
 
