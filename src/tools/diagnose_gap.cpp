@@ -60,7 +60,7 @@ struct Options
   std::string temperature_topic = "imu/temperature";
   double accel_scale = 1.0, gyro_scale = 1.0, time_scale = 1.0, rate = 0.0, max_duration = 0.0;
   int skip_lines = 0;
-  int steps = 3;
+  int steps = 4;
   bool plots = true;
   gap::DiagnoseOptions diag;
 };
@@ -473,12 +473,19 @@ int main(int argc, char** argv)
     gap::Report next;
     for (int k = 0; k < o.steps; ++k)
     {
-      if (cur->best < 0)
+      // forward selection: the verdict's effect, or failing that the best candidate if it
+      // explains at least 10 % (several effects together may explain what none does alone)
+      int pick = cur->best;
+      if (pick < 0 && cur->verdict_effect != "no_gap" && !cur->ranking.empty() && cur->ranking[0].shrink >= 0.1)
+      {
+        pick = 0;
+      }
+      if (pick < 0)
       {
         steps.push_back({ cur->verdict_effect, "{}", cur->gap_before, 0.0, 0.0 });
         break;
       }
-      const gap::Candidate& c = cur->ranking[cur->best];
+      const gap::Candidate& c = cur->ranking[pick];
       steps.push_back({ c.effect, c.params_json, cur->gap_before, c.shrink, cur->confidence });
       model = gap::applyCandidate(model, c);
       if (k + 1 < o.steps)
