@@ -3,7 +3,7 @@
 # gtest that replays its committed corpus (test/fuzz/corpus/<target>/): seeds and every input
 # that once found a bug run in scripts/test, also under ASan+UBSan (PBC_SANITIZE=ON).
 if(CATKIN_ENABLE_TESTING)
-  set(PBC_FUZZ_TARGETS compensator scenario imu_msg params bag)
+  set(PBC_FUZZ_TARGETS compensator scenario imu_msg params bag csv)
   foreach(target ${PBC_FUZZ_TARGETS})
     catkin_add_gtest(test_fuzz_corpus_${target} test/fuzz/replay_main.cpp test/fuzz/fuzz_${target}.cpp)
     target_compile_definitions(test_fuzz_corpus_${target} PRIVATE
@@ -11,7 +11,10 @@ if(CATKIN_ENABLE_TESTING)
   endforeach()
   target_link_libraries(test_fuzz_corpus_compensator ${PROJECT_NAME}_core)
   target_link_libraries(test_fuzz_corpus_scenario ${PROJECT_NAME}_sim)
-  foreach(target imu_msg params bag)
+  # csv: diagnose_gap's CSV reader (src/tools/diagnose_gap.cpp compiled into the harness).
+  target_link_libraries(test_fuzz_corpus_csv ${PROJECT_NAME}_gap)
+  target_compile_definitions(test_fuzz_corpus_csv PRIVATE PBC_SOURCE_DIR="${CMAKE_CURRENT_SOURCE_DIR}")
+  foreach(target imu_msg params bag csv)
     target_link_libraries(test_fuzz_corpus_${target} ${PROJECT_NAME}_ros ${catkin_LIBRARIES})
     add_dependencies(test_fuzz_corpus_${target} ${PROJECT_NAME}_generate_messages_cpp)
   endforeach()
