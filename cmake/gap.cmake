@@ -31,7 +31,7 @@ if(CATKIN_ENABLE_TESTING)
 
   # Gap library units, diagnosis on simulated cases, validate_gap --small, the CLI on a bag and
   # a CSV, and one real set when ../shared/data exists beside the repository (skipped otherwise).
-  catkin_add_gtest(test_gap test/gap/test_gap.cpp TIMEOUT 300)
+  catkin_add_gtest(test_gap test/gap/test_gap.cpp TIMEOUT 900)
   target_link_libraries(test_gap ${PROJECT_NAME}_gap)
   target_compile_definitions(test_gap PRIVATE
     PBC_VALIDATE_GAP="$<TARGET_FILE:validate_gap>"

@@ -63,7 +63,7 @@ def main():
             ax.set_xlabel("Hz", fontsize=7)
     axes[0].legend(fontsize=7)
     fig.tight_layout()
-    fig.savefig(os.path.join(d, "spectra.png"), dpi=80)
+    fig.savefig(os.path.join(d, "spectra.png"), dpi=72)
     plt.close(fig)
 
     al = curves(read(os.path.join(d, "allan.csv")), "tau")
@@ -80,7 +80,7 @@ def main():
             ax.set_xlabel("tau [s]", fontsize=7)
     axes[0].legend(fontsize=7)
     fig.tight_layout()
-    fig.savefig(os.path.join(d, "allan.png"), dpi=80)
+    fig.savefig(os.path.join(d, "allan.png"), dpi=72)
     plt.close(fig)
 
     dr = curves(read(os.path.join(d, "drift.csv")), "t")
@@ -98,7 +98,7 @@ def main():
             ax.set_xlabel("t [s]", fontsize=7)
     axes[0].legend(fontsize=7)
     fig.tight_layout()
-    fig.savefig(os.path.join(d, "drift.png"), dpi=80)
+    fig.savefig(os.path.join(d, "drift.png"), dpi=72)
     plt.close(fig)
 
     feats = read(os.path.join(d, "features.csv"))
@@ -121,7 +121,7 @@ def main():
     ax.set_title("gap heat map: z of log PSD per band, withheld part, scenario as given (clipped +-30): " + a.title, fontsize=8)
     fig.colorbar(im, ax=ax, fraction=0.02)
     fig.tight_layout()
-    fig.savefig(os.path.join(d, "heatmap.png"), dpi=80)
+    fig.savefig(os.path.join(d, "heatmap.png"), dpi=72)
     plt.close(fig)
 
 

@@ -279,6 +279,20 @@ Report diagnose(const Recording& real_in, const sim::Scenario& scenario_in, cons
       std::swap(cands[0], cands[1]);
     }
   }
+  // A Gauss-Markov bias whose fitted correlation time exceeds half the recording is, over that
+  // recording, a random walk: name the simpler random walk when it explains about as much.
+  if (cands.size() >= 2 && cands[0].effect == "bias_instability" && !cands[0].specs.empty())
+  {
+    const double tc = cands[0].specs.back().params.at("correlation_time")[0];
+    for (std::size_t i = 1; i < cands.size(); ++i)
+    {
+      if (cands[i].effect == "bias_random_walk" && tc > 0.5 * rep.duration && cands[0].shrink - cands[i].shrink < 0.15)
+      {
+        std::swap(cands[0], cands[i]);
+        break;
+      }
+    }
+  }
   // Best pair of two different effects, if it explains clearly more.
   if (cands.size() >= 2 && cands[0].shrink > 0)
   {

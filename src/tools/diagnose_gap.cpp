@@ -60,7 +60,7 @@ struct Options
   std::string temperature_topic = "imu/temperature";
   double accel_scale = 1.0, gyro_scale = 1.0, time_scale = 1.0, rate = 0.0, max_duration = 0.0;
   int skip_lines = 0;
-  int steps = 4;
+  int steps = 5;
   bool plots = true;
   gap::DiagnoseOptions diag;
 };
@@ -474,9 +474,9 @@ int main(int argc, char** argv)
     for (int k = 0; k < o.steps; ++k)
     {
       // forward selection: the verdict's effect, or failing that the best candidate if it
-      // explains at least 10 % (several effects together may explain what none does alone)
+      // explains at least 5 % (several effects together may explain what none does alone)
       int pick = cur->best;
-      if (pick < 0 && cur->verdict_effect != "no_gap" && !cur->ranking.empty() && cur->ranking[0].shrink >= 0.1)
+      if (pick < 0 && cur->verdict_effect != "no_gap" && !cur->ranking.empty() && cur->ranking[0].shrink >= 0.05)
       {
         pick = 0;
       }

@@ -217,7 +217,7 @@ TEST(GapRealData, AdisStaticAgainstAPlausibleScenario)
                                 " --columns t=t_s,ax=acc_x_g,ay=-acc_y_g,az=-acc_z_g,gx=gyro_x_dps,gy=-gyro_y_dps,gz=-gyro_z_dps"
                                 " --accel-scale 9.80665 --gyro-scale 0.017453292519943295 --sim " +
                                 std::string(PBC_SOURCE_DIR) + "/config/scenarios/gap_adis16405_static.yaml --out " + dir +
-                                " --no-plots");
+                                " --no-plots --steps 1 --ensemble 4 --max-duration 300");
   ASSERT_EQ(r.status, 0) << r.output;
   // the ADIS16405 output is on its LSB lattice (0.05 deg/s, 3.33 mg): found directly
   EXPECT_NE(r.output.find("quantization=yes"), std::string::npos) << r.output;
