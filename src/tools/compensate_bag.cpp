@@ -10,8 +10,10 @@
 // 2 wrong command line.
 #include <chrono>
 #include <cinttypes>
+#include <cstdint>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <iostream>
 #include <map>
 #include <set>
@@ -122,6 +124,136 @@ Parameters loadParameters(const Options& options)
   return params;
 }
 
+/// Walks the record structure of a bag (format 2.0) before rosbag reads it: every field of
+/// every record header that is present must lie inside its header, also for the records inside
+/// uncompressed chunks. rosbag (ros::Header::parse) trusts those lengths and reads past its
+/// buffer on a corrupt one (found by test/fuzz/fuzz_bag.cpp; docs/reliability.md F7). A record
+/// cut off by the end of the file is left to rosbag, which reports the truncation.
+/// @return an empty string, or what is wrong and where
+std::string checkBagStructure(const std::string& path)
+{
+  std::ifstream file(path, std::ios::binary);
+  static const std::string kMagic = "#ROSBAG V2.0\n";
+  std::string magic(kMagic.size(), '\0');
+  if (!file.read(&magic[0], static_cast<std::streamsize>(magic.size())) || magic != kMagic)
+  {
+    return std::string();  // not a 2.0 bag: rosbag says so
+  }
+  file.seekg(0, std::ios::end);
+  const std::uint64_t size = static_cast<std::uint64_t>(file.tellg());
+  auto u32 = [](const char* p) {
+    return static_cast<std::uint32_t>(static_cast<unsigned char>(p[0])) |
+           (static_cast<std::uint32_t>(static_cast<unsigned char>(p[1])) << 8) |
+           (static_cast<std::uint32_t>(static_cast<unsigned char>(p[2])) << 16) |
+           (static_cast<std::uint32_t>(static_cast<unsigned char>(p[3])) << 24);
+  };
+  // Checks one header; fills op and compression. Empty string when sound.
+  auto checkHeader = [&u32](const std::string& header, std::uint64_t where, std::string* op, std::string* compression) {
+    std::size_t offset = 0;
+    while (offset < header.size())
+    {
+      if (header.size() - offset < 4)
+      {
+        return "record header at byte " + std::to_string(where) + " ends inside a field length";
+      }
+      const std::uint32_t length = u32(header.data() + offset);
+      offset += 4;
+      if (length > header.size() - offset)
+      {
+        return "record header at byte " + std::to_string(where) + " has a field of " + std::to_string(length) +
+               " bytes in a header of " + std::to_string(header.size());
+      }
+      const std::string field = header.substr(offset, length);
+      offset += length;
+      if (field.rfind("op=", 0) == 0)
+      {
+        *op = field.substr(3);
+      }
+      else if (field.rfind("compression=", 0) == 0)
+      {
+        *compression = field.substr(12);
+      }
+    }
+    return std::string();
+  };
+  // Walks the records of [begin, end) of a buffer (an uncompressed chunk).
+  auto walkBuffer = [&](const std::string& data, std::uint64_t base) -> std::string {
+    std::size_t offset = 0;
+    while (data.size() - offset >= 4)
+    {
+      const std::uint32_t header_length = u32(data.data() + offset);
+      if (header_length > data.size() - offset - 4)
+      {
+        return "record at byte " + std::to_string(base + offset) + " inside a chunk runs past the chunk";
+      }
+      std::string op, compression;
+      const std::string why = checkHeader(data.substr(offset + 4, header_length), base + offset, &op, &compression);
+      if (!why.empty())
+      {
+        return why;
+      }
+      offset += 4 + header_length;
+      if (data.size() - offset < 4)
+      {
+        return "record at byte " + std::to_string(base + offset) + " inside a chunk has no data length";
+      }
+      const std::uint32_t data_length = u32(data.data() + offset);
+      offset += 4;
+      if (data_length > data.size() - offset)
+      {
+        return "record data at byte " + std::to_string(base + offset) + " inside a chunk runs past the chunk";
+      }
+      offset += data_length;
+    }
+    return offset == data.size() ? std::string() : "chunk ends inside a record length";
+  };
+  std::uint64_t position = kMagic.size();
+  file.seekg(static_cast<std::streamoff>(position));
+  char length[4];
+  while (position + 4 <= size)
+  {
+    file.seekg(static_cast<std::streamoff>(position));
+    file.read(length, 4);
+    const std::uint32_t header_length = u32(length);
+    if (header_length > size - position - 4)
+    {
+      return std::string();  // cut off: rosbag reports it
+    }
+    std::string header(header_length, '\0');
+    file.read(&header[0], header_length);
+    std::string op, compression;
+    const std::string why = checkHeader(header, position, &op, &compression);
+    if (!why.empty())
+    {
+      return why;
+    }
+    position += 4 + header_length;
+    if (position + 4 > size)
+    {
+      return std::string();
+    }
+    file.read(length, 4);
+    const std::uint32_t data_length = u32(length);
+    position += 4;
+    if (data_length > size - position)
+    {
+      return std::string();
+    }
+    if (op == std::string(1, '\x05') && compression == "none")
+    {
+      std::string data(data_length, '\0');
+      file.read(&data[0], data_length);
+      const std::string inner = walkBuffer(data, position);
+      if (!inner.empty())
+      {
+        return inner;
+      }
+    }
+    position += data_length;
+  }
+  return std::string();
+}
+
 /// Writes the outputs of one bag; the caller owns the temporary file.
 class BagCompensator
 {
@@ -190,6 +322,11 @@ public:
 
   void runUnchecked(const std::string& temp_path)
   {
+    const std::string structure = checkBagStructure(options_.in);
+    if (!structure.empty())
+    {
+      throw std::runtime_error(corruptMessage(structure));
+    }
     rosbag::Bag in;
     in.open(options_.in, rosbag::bagmode::Read);
     const std::string imu_topic = absoluteTopic(options_.imu_topic);
