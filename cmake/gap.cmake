@@ -39,4 +39,11 @@ if(CATKIN_ENABLE_TESTING)
     PBC_SIMULATE_IMU="$<TARGET_FILE:simulate_imu>"
     PBC_SOURCE_DIR="${CMAKE_CURRENT_SOURCE_DIR}")
   add_dependencies(test_gap validate_gap diagnose_gap simulate_imu)
+
+  # simulator_node on simulated time feeding compensator.launch: odometry/filtered arrives.
+  add_rostest_gtest(test_simulator_compensator test/tools/simulator_compensator.test
+    test/tools/simulator_compensator.cpp)
+  target_include_directories(test_simulator_compensator PRIVATE ${catkin_INCLUDE_DIRS})
+  target_link_libraries(test_simulator_compensator ${catkin_LIBRARIES})
+  add_dependencies(test_simulator_compensator simulator_node compensator_node)
 endif()
