@@ -128,7 +128,8 @@ Parameters loadParameters(const Options& options)
 /// every record header that is present must lie inside its header, also for the records inside
 /// uncompressed chunks. rosbag (ros::Header::parse) trusts those lengths and reads past its
 /// buffer on a corrupt one (found by test/fuzz/fuzz_bag.cpp; docs/reliability.md F7). A record
-/// cut off by the end of the file is left to rosbag, which reports the truncation.
+/// cut off by the end of the file (a bag that ends mid-chunk) is reported here too: rosbag would
+/// first allocate the length it claims.
 /// @return an empty string, or what is wrong and where
 std::string checkBagStructure(const std::string& path)
 {
@@ -217,7 +218,10 @@ std::string checkBagStructure(const std::string& path)
     const std::uint32_t header_length = u32(length);
     if (header_length > size - position - 4)
     {
-      return std::string();  // cut off: rosbag reports it
+      // Cut off (or a corrupt length). Said here: rosbag would first allocate the length the
+      // record claims (up to 4 GB) before finding that the file ends.
+      return "record at byte " + std::to_string(position) + " declares a " + std::to_string(header_length) +
+             "-byte header but the file ends " + std::to_string(size - position - 4) + " bytes later";
     }
     std::string header(header_length, '\0');
     file.read(&header[0], header_length);
@@ -230,14 +234,15 @@ std::string checkBagStructure(const std::string& path)
     position += 4 + header_length;
     if (position + 4 > size)
     {
-      return std::string();
+      return "the file ends inside the record before byte " + std::to_string(position + 4);
     }
     file.read(length, 4);
     const std::uint32_t data_length = u32(length);
     position += 4;
     if (data_length > size - position)
     {
-      return std::string();
+      return "record data at byte " + std::to_string(position) + " declares " + std::to_string(data_length) +
+             " bytes but the file ends " + std::to_string(size - position) + " bytes later";
     }
     if (op == std::string(1, '\x05') && compression == "none")
     {
