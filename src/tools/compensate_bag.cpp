@@ -138,7 +138,18 @@ std::string checkBagStructure(const std::string& path)
   std::string magic(kMagic.size(), '\0');
   if (!file.read(&magic[0], static_cast<std::streamsize>(magic.size())) || magic != kMagic)
   {
-    return std::string();  // not a 2.0 bag: rosbag says so
+    // rosbag also reads format 1.2; anything else is refused here, since rosbag goes on
+    // parsing records after a garbled version line (fuzz_bag found an out-of-bounds read so).
+    if (magic.rfind("#ROSBAG V1.2", 0) == 0 || magic.size() < 8)
+    {
+      return std::string();
+    }
+    std::string shown;
+    for (char c : magic)
+    {
+      shown += (c >= 32 && c < 127) ? c : '?';
+    }
+    return "the file does not start with '#ROSBAG V2.0' (it starts with '" + shown + "')";
   }
   file.seekg(0, std::ios::end);
   const std::uint64_t size = static_cast<std::uint64_t>(file.tellg());

@@ -62,6 +62,13 @@ pbc::CompensatorConfig makeConfig(pbc_fuzz::Input& in, bool wild)
   c.drift_time_constant = wild ? in.value(2.0, 2.0) : in.range(0.5, 10.0);
   c.max_gap = wild ? in.value(0.5, 0.5) : in.range(0.01, 2.0);
   c.max_rate_change = wild ? in.value(0.2, 0.2) : in.range(0.01, 0.9);
+  // Known finding F8: a calibration window shorter than a sample step gives an absurd bias.
+  // Kept at >= 0.1 s unless PBC_FUZZ_SHORT_CALIBRATION=1.
+  static const bool short_calibration = std::getenv("PBC_FUZZ_SHORT_CALIBRATION") != nullptr;
+  if (!short_calibration && c.calibration_duration >= 0.0 && c.calibration_duration < 0.1)
+  {
+    c.calibration_duration = 0.1;
+  }
   return c;
 }
 
