@@ -138,12 +138,8 @@ std::string checkBagStructure(const std::string& path)
   std::string magic(kMagic.size(), '\0');
   if (!file.read(&magic[0], static_cast<std::streamsize>(magic.size())) || magic != kMagic)
   {
-    // rosbag also reads format 1.2; anything else is refused here, since rosbag goes on
-    // parsing records after a garbled version line (fuzz_bag found an out-of-bounds read so).
-    if (magic.rfind("#ROSBAG V1.2", 0) == 0 || magic.size() < 8)
-    {
-      return std::string();
-    }
+    // Only format 2.0 (every rosbag since 2010): rosbag's 1.2 reader and its handling of a
+    // garbled version line parse records unchecked (fuzz_bag found out-of-bounds reads in both).
     std::string shown;
     for (char c : magic)
     {
