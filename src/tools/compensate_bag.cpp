@@ -211,6 +211,17 @@ std::string checkBagStructure(const std::string& path)
       {
         return "record data at byte " + std::to_string(base + offset) + " inside a chunk runs past the chunk";
       }
+      if (op == std::string(1, '\x07'))
+      {
+        // A connection record's data is itself a header (topic, type, md5sum, definition).
+        std::string unused_op, unused_compression;
+        const std::string connection =
+            checkHeader(data.substr(offset, data_length), base + offset, &unused_op, &unused_compression);
+        if (!connection.empty())
+        {
+          return connection;
+        }
+      }
       offset += data_length;
     }
     return offset == data.size() ? std::string() : "chunk ends inside a record length";
@@ -250,6 +261,18 @@ std::string checkBagStructure(const std::string& path)
     {
       return "record data at byte " + std::to_string(position) + " declares " + std::to_string(data_length) +
              " bytes but the file ends " + std::to_string(size - position) + " bytes later";
+    }
+    if (op == std::string(1, '\x07'))
+    {
+      // A connection record's data is itself a header (topic, type, md5sum, definition).
+      std::string data(data_length, '\0');
+      file.read(&data[0], data_length);
+      std::string unused_op, unused_compression;
+      const std::string connection = checkHeader(data, position, &unused_op, &unused_compression);
+      if (!connection.empty())
+      {
+        return connection;
+      }
     }
     if (op == std::string(1, '\x05') && compression == "none")
     {
