@@ -24,6 +24,8 @@ bool loadCalibration(const std::string& path, Eigen::Vector3d* bias, std::string
   {
     return fail(std::string("cannot read calibration file (") + e.what() + ")");
   }
+  if (!root.IsMap())
+    return fail("expected a map with the key 'constant_bias' (constant_bias: [bx, by, bz] in m/s^2)");
   const YAML::Node node = root["constant_bias"];
   if (!node)
     return fail("key 'constant_bias' missing (expected constant_bias: [bx, by, bz] in m/s^2)");

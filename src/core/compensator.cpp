@@ -18,6 +18,11 @@ constexpr int kMaxHarmonics = 4;
 constexpr std::size_t kFrequencyHistory = 20;
 /// Largest frequency drift believed [Hz/s].
 constexpr double kMaxFrequencySlope = 0.01;
+/// Largest relative change of the frequency extrapolated from the last FFT estimate [-].
+constexpr double kMaxExtrapolation = 0.15;
+/// Highest sample rate planned for [Hz]: a stamp step far below any IMU's period (a driver
+/// glitch) must not size FFT windows and tables for an absurd rate.
+constexpr double kMaxSampleRate = 10000.0;
 
 bool isFinite(const Vector3& v)
 {
@@ -514,7 +519,7 @@ private:
 
   void updateRate(double dt)
   {
-    const double rate = 1.0 / dt;
+    const double rate = std::min(1.0 / dt, kMaxSampleRate);
     if (rate_ <= 0.0)
     {
       rate_ = rate;
@@ -827,7 +832,12 @@ private:
     {
       // The FFT reports the frequency at the centre of its window; a drifting encounter
       // frequency is extrapolated from there to now.
-      const double frequency = axis.frequency + axis.frequency_slope * (now_ - axis.frequency_time);
+      // Bounded: a noisy slope extrapolated over a long window must never take the frequency
+      // towards zero, where the displacement (divided by omega^2) would explode.
+      const double frequency =
+          std::clamp(axis.frequency + axis.frequency_slope * (now_ - axis.frequency_time),
+                     std::max(config_.min_frequency, (1.0 - kMaxExtrapolation) * axis.frequency),
+                     (1.0 + kMaxExtrapolation) * axis.frequency);
       const double omega = 2.0 * M_PI * frequency;
       axis.phase = std::fmod(axis.phase + omega * dt, 2.0 * M_PI);
       const double lambda = std::exp(-dt / config_.harmonic_memory);
