@@ -20,13 +20,6 @@ target_link_libraries(compensator_node ${PROJECT_NAME}_ros ${catkin_LIBRARIES})
 add_executable(compensate_bag src/tools/compensate_bag.cpp)
 target_link_libraries(compensate_bag ${PROJECT_NAME}_ros ${catkin_LIBRARIES})
 
-install(TARGETS ${PROJECT_NAME}_ros ${PROJECT_NAME}_nodelet compensator_node compensate_bag
-  ARCHIVE DESTINATION ${CATKIN_PACKAGE_LIB_DESTINATION}
-  LIBRARY DESTINATION ${CATKIN_PACKAGE_LIB_DESTINATION}
-  RUNTIME DESTINATION ${CATKIN_PACKAGE_BIN_DESTINATION})
-install(DIRECTORY include/${PROJECT_NAME}/ros DESTINATION ${CATKIN_PACKAGE_INCLUDE_DESTINATION})
-install(FILES nodelet_plugins.xml DESTINATION ${CATKIN_PACKAGE_SHARE_DESTINATION})
-
 if(CATKIN_ENABLE_TESTING)
   find_package(rostest REQUIRED)
   find_package(roslaunch REQUIRED)

@@ -8,15 +8,20 @@ add_library(${PROJECT_NAME}_sim
 target_include_directories(${PROJECT_NAME}_sim PUBLIC include)
 target_link_libraries(${PROJECT_NAME}_sim PUBLIC Eigen3::Eigen yaml-cpp)
 
+# The ROS messages of a simulator sample, shared by simulate_imu and simulator_node.
+add_library(${PROJECT_NAME}_sim_ros src/ros/sim_messages.cpp)
+target_include_directories(${PROJECT_NAME}_sim_ros PUBLIC include ${catkin_INCLUDE_DIRS})
+target_link_libraries(${PROJECT_NAME}_sim_ros PUBLIC ${PROJECT_NAME}_sim ${catkin_LIBRARIES})
+
 # Command-line front end: scenario -> bag (and CSV), no ROS master needed.
 add_executable(simulate_imu src/tools/simulate_imu.cpp)
 target_include_directories(simulate_imu PRIVATE ${catkin_INCLUDE_DIRS})
-target_link_libraries(simulate_imu ${PROJECT_NAME}_sim ${catkin_LIBRARIES})
+target_link_libraries(simulate_imu ${PROJECT_NAME}_sim_ros)
 
 # Live publisher on simulated time (thin: only calls the sim library).
 add_executable(simulator_node src/ros/simulator_node.cpp)
 target_include_directories(simulator_node PRIVATE ${catkin_INCLUDE_DIRS})
-target_link_libraries(simulator_node ${PROJECT_NAME}_sim ${catkin_LIBRARIES})
+target_link_libraries(simulator_node ${PROJECT_NAME}_sim_ros)
 
 if(CATKIN_ENABLE_TESTING)
   catkin_add_gtest(test_sim

@@ -10,52 +10,14 @@
 // ground_truth/slow, ground_truth/wave, /clock. Frames as simulate_imu (docs/simulator.md).
 #include <string>
 
-#include <nav_msgs/Odometry.h>
 #include <ros/ros.h>
 #include <rosgraph_msgs/Clock.h>
-#include <sensor_msgs/Imu.h>
-#include <sensor_msgs/Temperature.h>
 
+#include "periodic_bias_compensation/ros/sim_messages.h"
 #include "periodic_bias_compensation/sim/simulator.h"
 
+namespace pbc = periodic_bias_compensation;
 namespace sim = periodic_bias_compensation::sim;
-
-namespace
-{
-geometry_msgs::Vector3 toVector(const sim::Vector3& v)
-{
-  geometry_msgs::Vector3 m;
-  m.x = v.x();
-  m.y = v.y();
-  m.z = v.z();
-  return m;
-}
-
-geometry_msgs::Quaternion toQuaternion(const sim::Quaternion& q)
-{
-  geometry_msgs::Quaternion m;
-  m.w = q.w();
-  m.x = q.x();
-  m.y = q.y();
-  m.z = q.z();
-  return m;
-}
-
-nav_msgs::Odometry toOdometry(const ros::Time& stamp, const sim::OdometryState& state)
-{
-  nav_msgs::Odometry m;
-  m.header.stamp = stamp;
-  m.header.frame_id = "odom";
-  m.child_frame_id = "base_link";
-  m.pose.pose.position.x = state.position.x();
-  m.pose.pose.position.y = state.position.y();
-  m.pose.pose.position.z = state.position.z();
-  m.pose.pose.orientation = toQuaternion(state.orientation);
-  m.twist.twist.linear = toVector(state.linear_velocity);
-  m.twist.twist.angular = toVector(state.angular_velocity);
-  return m;
-}
-}  // namespace
 
 int main(int argc, char** argv)
 {
@@ -92,13 +54,14 @@ int main(int argc, char** argv)
   int seed = static_cast<int>(scenario.seed);
   pnh.param("seed", seed, seed);
   sim::Simulator simulator(scenario, static_cast<std::uint64_t>(seed));
-  const sim::ImuCovariance cov = sim::imuCovariance(simulator.scenario());
+  const pbc::SimMessageBuilder builder(simulator.scenario());
 
-  ros::Publisher imu_pub = nh.advertise<sensor_msgs::Imu>("imu/data", 200);
-  ros::Publisher temperature_pub = nh.advertise<sensor_msgs::Temperature>("imu/temperature", 50);
-  ros::Publisher odom_pub = nh.advertise<nav_msgs::Odometry>("ground_truth/odometry", 200);
-  ros::Publisher slow_pub = nh.advertise<nav_msgs::Odometry>("ground_truth/slow", 200);
-  ros::Publisher wave_pub = nh.advertise<nav_msgs::Odometry>("ground_truth/wave", 200);
+  using Topics = pbc::SimTopics;
+  ros::Publisher imu_pub = nh.advertise<sensor_msgs::Imu>(Topics::kImu, 200);
+  ros::Publisher temperature_pub = nh.advertise<sensor_msgs::Temperature>(Topics::kTemperature, 50);
+  ros::Publisher odom_pub = nh.advertise<nav_msgs::Odometry>(Topics::kTruth, 200);
+  ros::Publisher slow_pub = nh.advertise<nav_msgs::Odometry>(Topics::kTruthSlow, 200);
+  ros::Publisher wave_pub = nh.advertise<nav_msgs::Odometry>(Topics::kTruthWave, 200);
   ros::Publisher clock_pub;
   if (publish_clock)
   {
@@ -108,19 +71,9 @@ int main(int argc, char** argv)
            static_cast<long long>(simulator.sampleCount()), scenario.rate, rate_factor,
            publish_clock ? ", publishing /clock" : "");
 
-  sensor_msgs::Imu imu;
-  imu.header.frame_id = "imu_link";
-  for (int i = 0; i < 3; ++i)
-  {
-    imu.orientation_covariance[4 * i] = cov.orientation_variance;
-    imu.angular_velocity_covariance[4 * i] = cov.gyro_variance[i];
-    imu.linear_acceleration_covariance[4 * i] = cov.accel_variance[i];
-  }
-  sensor_msgs::Temperature temperature;
-  temperature.header.frame_id = "imu_link";
-
   const ros::WallTime wall_start = ros::WallTime::now();
   sim::Sample s;
+  pbc::SimMessages messages;
   while (ros::ok() && simulator.next(&s))
   {
     if (rate_factor > 0.0)
@@ -139,25 +92,18 @@ int main(int argc, char** argv)
       clock.clock = t;
       clock_pub.publish(clock);
     }
-    if (!s.dropped)
+    builder.build(s, &messages);
+    if (messages.has_imu)
     {
-      imu.header.stamp = ros::Time(s.stamp);
-      imu.header.seq = static_cast<std::uint32_t>(s.index);
-      imu.orientation = toQuaternion(s.orientation);
-      imu.angular_velocity = toVector(s.gyro);
-      imu.linear_acceleration = toVector(s.accel);
-      imu_pub.publish(imu);
-      if (s.has_temperature)
-      {
-        temperature.header.stamp = imu.header.stamp;
-        temperature.temperature = s.temperature;
-        temperature_pub.publish(temperature);
-      }
+      imu_pub.publish(messages.imu);
     }
-    const sim::TruthOdometry odom = sim::truthOdometry(s.truth);
-    odom_pub.publish(toOdometry(t, odom.total));
-    slow_pub.publish(toOdometry(t, odom.slow));
-    wave_pub.publish(toOdometry(t, odom.wave));
+    if (messages.has_temperature)
+    {
+      temperature_pub.publish(messages.temperature);
+    }
+    odom_pub.publish(messages.truth);
+    slow_pub.publish(messages.truth_slow);
+    wave_pub.publish(messages.truth_wave);
     ros::spinOnce();
   }
   ROS_INFO("simulator_node: scenario finished");

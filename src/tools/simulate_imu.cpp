@@ -9,15 +9,14 @@
 #include <stdexcept>
 #include <string>
 
-#include <nav_msgs/Odometry.h>
 #include <ros/time.h>
 #include <rosbag/bag.h>
-#include <sensor_msgs/Imu.h>
-#include <sensor_msgs/Temperature.h>
 
+#include "periodic_bias_compensation/ros/sim_messages.h"
 #include "periodic_bias_compensation/sim/simulator.h"
 
 namespace sim = periodic_bias_compensation::sim;
+namespace pbc = periodic_bias_compensation;
 
 namespace
 {
@@ -109,47 +108,6 @@ void listEffects()
   }
 }
 
-geometry_msgs::Quaternion toMsg(const sim::Quaternion& q)
-{
-  geometry_msgs::Quaternion m;
-  m.w = q.w();
-  m.x = q.x();
-  m.y = q.y();
-  m.z = q.z();
-  return m;
-}
-
-geometry_msgs::Vector3 toMsg(const sim::Vector3& v)
-{
-  geometry_msgs::Vector3 m;
-  m.x = v.x();
-  m.y = v.y();
-  m.z = v.z();
-  return m;
-}
-
-geometry_msgs::Point toPoint(const sim::Vector3& v)
-{
-  geometry_msgs::Point m;
-  m.x = v.x();
-  m.y = v.y();
-  m.z = v.z();
-  return m;
-}
-
-nav_msgs::Odometry odometry(const ros::Time& stamp, const sim::OdometryState& state)
-{
-  nav_msgs::Odometry m;
-  m.header.stamp = stamp;
-  m.header.frame_id = "odom";
-  m.child_frame_id = "base_link";
-  m.pose.pose.position = toPoint(state.position);
-  m.pose.pose.orientation = toMsg(state.orientation);
-  m.twist.twist.linear = toMsg(state.linear_velocity);
-  m.twist.twist.angular = toMsg(state.angular_velocity);
-  return m;
-}
-
 void writeCsvHeader(std::ostream& out)
 {
   out << "index,t,stamp,dropped,ax,ay,az,gx,gy,gz,qw,qx,qy,qz,temperature,"
@@ -201,7 +159,7 @@ int run(const Options& o)
     std::cout << sim::toYaml(shown);
     return 0;
   }
-  const sim::ImuCovariance cov = sim::imuCovariance(simulator.scenario());
+  const pbc::SimMessageBuilder builder(simulator.scenario());
 
   std::unique_ptr<rosbag::Bag> bag;
   if (!o.bag.empty())
@@ -220,19 +178,9 @@ int run(const Options& o)
     writeCsvHeader(csv);
   }
 
-  sensor_msgs::Imu imu;
-  imu.header.frame_id = "imu_link";
-  for (int i = 0; i < 3; ++i)
-  {
-    imu.orientation_covariance[4 * i] = cov.orientation_variance;
-    imu.angular_velocity_covariance[4 * i] = cov.gyro_variance[i];
-    imu.linear_acceleration_covariance[4 * i] = cov.accel_variance[i];
-  }
-  sensor_msgs::Temperature temperature;
-  temperature.header.frame_id = "imu_link";
-
   const auto start = std::chrono::steady_clock::now();
   sim::Sample s;
+  pbc::SimMessages messages;
   std::int64_t dropped = 0;
   while (simulator.next(&s))
   {
@@ -245,26 +193,20 @@ int run(const Options& o)
     {
       continue;
     }
+    using Topics = pbc::SimTopics;
     const ros::Time t(s.t);
-    if (!s.dropped)
+    builder.build(s, &messages);
+    if (messages.has_imu)
     {
-      imu.header.stamp = ros::Time(s.stamp);
-      imu.header.seq = static_cast<std::uint32_t>(s.index);
-      imu.orientation = toMsg(s.orientation);
-      imu.angular_velocity = toMsg(s.gyro);
-      imu.linear_acceleration = toMsg(s.accel);
-      bag->write("imu/data", t, imu);
-      if (s.has_temperature)
-      {
-        temperature.header.stamp = imu.header.stamp;
-        temperature.temperature = s.temperature;
-        bag->write("imu/temperature", t, temperature);
-      }
+      bag->write(Topics::kImu, t, messages.imu);
     }
-    const sim::TruthOdometry odom = sim::truthOdometry(s.truth);
-    bag->write("ground_truth/odometry", t, odometry(t, odom.total));
-    bag->write("ground_truth/slow", t, odometry(t, odom.slow));
-    bag->write("ground_truth/wave", t, odometry(t, odom.wave));
+    if (messages.has_temperature)
+    {
+      bag->write(Topics::kTemperature, t, messages.temperature);
+    }
+    bag->write(Topics::kTruth, t, messages.truth);
+    bag->write(Topics::kTruthSlow, t, messages.truth_slow);
+    bag->write(Topics::kTruthWave, t, messages.truth_wave);
   }
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   std::cerr << "simulate_imu: " << simulator.sampleCount() << " samples (" << dropped << " dropped), "
