@@ -1,6 +1,6 @@
-# Offline tools that link the cores only (no ROS master, no bag).
+# Offline tools on the cores (no ROS master); evaluate_compensator reads other estimators' bags.
 add_executable(evaluate_compensator src/tools/evaluate_compensator.cpp)
-target_link_libraries(evaluate_compensator ${PROJECT_NAME}_core ${PROJECT_NAME}_sim)
+target_link_libraries(evaluate_compensator ${PROJECT_NAME}_core ${PROJECT_NAME}_sim ${catkin_LIBRARIES})
 
 # Speed benchmark of the core (Google Benchmark); run by scripts/bench, not a test.
 find_package(benchmark QUIET)

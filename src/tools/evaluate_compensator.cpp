@@ -1,11 +1,12 @@
 // evaluate_compensator: runs the estimation core over simulated scenarios with known truth and
 // prints the drift of each method (no ROS, no bag): plain double integration, a causal high-pass
 // baseline in the style of x-io's oscillatory motion tracking, constant-bias compensation, the
-// paper's periodic compensation and the project's default mode.
+// paper's periodic compensation and the project's default mode. With --estimate it also scores
+// the odometry another estimator wrote to a bag for the same scenario and seed (scripts/bench).
 //
 //   evaluate_compensator --scenario config/scenarios/paper_bench.yaml
 //       [--calibration-scenario config/scenarios/paper_static.yaml] [--seeds 5] [--settle 20]
-//       [--markdown OUT.md] [--csv OUT.csv]
+//       [--estimate NAME=BAG_PATTERN]... [--markdown OUT.md] [--csv OUT.csv]
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -16,6 +17,10 @@
 #include <sstream>
 #include <string>
 #include <vector>
+
+#include <nav_msgs/Odometry.h>
+#include <rosbag/bag.h>
+#include <rosbag/view.h>
 
 #include "periodic_bias_compensation/core/compensator.h"
 #include "periodic_bias_compensation/sim/simulator.h"
@@ -34,17 +39,23 @@ struct Options
   double settle = 20.0;
   std::string markdown;
   std::string csv;
+  std::vector<std::pair<std::string, std::string>> estimates;  ///< name, bag pattern
 };
 
 void usage(std::ostream& out)
 {
   out << "usage: evaluate_compensator --scenario FILE.yaml [--calibration-scenario STATIC.yaml]\n"
-         "                            [--seeds N] [--settle S] [--markdown OUT.md] [--csv OUT.csv]\n"
+         "                            [--seeds N] [--settle S] [--estimate NAME=BAG_PATTERN]...\n"
+         "                            [--markdown OUT.md] [--csv OUT.csv]\n"
          "Simulates the scenario N times (seeds 1..N) and reports, per method and axis, the slow-motion\n"
          "error after the run, the total position error after the run, and the wave RMS error after S\n"
          "seconds as a percentage of the true wave RMS. With --calibration-scenario the constant bias\n"
          "of the 'constant' and 'paper' methods comes from a run of that (static) scenario, as in the\n"
-         "paper; the default mode always calibrates itself from the data, causally.\n";
+         "paper; the default mode always calibrates itself from the data, causally.\n"
+         "--estimate adds a method NAME scored on the odometry another estimator wrote for the same\n"
+         "scenario and seed: BAG_PATTERN with {seed} replaced by the seed; its odometry/filtered is the\n"
+         "slow motion (linearly interpolated to the samples) and its odometry/wave, if present, the\n"
+         "wave motion (zero otherwise); positions relative to the estimator's start.\n";
 }
 
 std::optional<Options> parse(int argc, char** argv)
@@ -70,6 +81,14 @@ std::optional<Options> parse(int argc, char** argv)
       o.markdown = value();
     else if (arg == "--csv")
       o.csv = value();
+    else if (arg == "--estimate")
+    {
+      const std::string spec = value();
+      const auto eq = spec.find('=');
+      if (eq == std::string::npos || eq == 0 || eq + 1 == spec.size())
+        throw std::runtime_error("--estimate takes NAME=BAG_PATTERN, got '" + spec + "'");
+      o.estimates.emplace_back(spec.substr(0, eq), spec.substr(eq + 1));
+    }
     else if (arg == "-h" || arg == "--help")
     {
       usage(std::cout);
@@ -118,44 +137,65 @@ struct Errors
   Vector3 wave_rms_percent = Vector3::Constant(NAN);  ///< RMS(wave - true wave) / RMS(true wave) [%]
 };
 
+/// The metrics of every method: a method's slow and wave motion, sample by sample, against the
+/// truth (positions relative to the first sample's).
+class Scorer
+{
+public:
+  Scorer(const sim::Sample& first, double settle) : slow0_(first.truth.slow_position), settle_(settle) {}
+
+  void add(const sim::Sample& s, const Vector3& slow, const Vector3& wave)
+  {
+    if (s.elapsed < settle_)
+      return;
+    const Vector3 e = wave - s.truth.wave_position;
+    error2_ += e.cwiseProduct(e);
+    truth2_ += s.truth.wave_position.cwiseProduct(s.truth.wave_position);
+    const Vector3 slow_error = slow - (s.truth.slow_position - slow0_);
+    const Vector3 total_error = slow + wave - (s.truth.position - slow0_);
+    slow2_ += slow_error.cwiseProduct(slow_error);
+    total2_ += total_error.cwiseProduct(total_error);
+    ++n_;
+  }
+
+  /// The errors, with the method's final slow and wave motion at the last sample.
+  Errors finish(const sim::Sample& last, const Vector3& slow, const Vector3& wave) const
+  {
+    Errors errors;
+    errors.slow_final = (slow - (last.truth.slow_position - slow0_)).cwiseAbs();
+    errors.total_final = (slow + wave - (last.truth.position - slow0_)).cwiseAbs();
+    for (int i = 0; i < 3; ++i)
+      if (truth2_[i] > 0.0)
+        errors.wave_rms_percent[i] = 100.0 * std::sqrt(error2_[i] / truth2_[i]);
+    if (n_ > 0)
+    {
+      errors.slow_rms = (slow2_ / n_).cwiseSqrt();
+      errors.total_rms = (total2_ / n_).cwiseSqrt();
+    }
+    return errors;
+  }
+
+private:
+  Vector3 slow0_;
+  double settle_;
+  Vector3 error2_ = Vector3::Zero(), truth2_ = Vector3::Zero(), slow2_ = Vector3::Zero(), total2_ = Vector3::Zero();
+  int n_ = 0;
+};
+
 Errors evaluate(const std::vector<sim::Sample>& samples, const pbc::CompensatorConfig& config,
                 const std::optional<Vector3>& bias, double settle)
 {
   pbc::Compensator compensator(config);
   if (bias)
     compensator.setConstantBias(*bias);
-  const Vector3 slow0 = samples.front().truth.slow_position;
+  Scorer scorer(samples.front(), settle);
   pbc::CompensatorOutput out;
-  Vector3 error2 = Vector3::Zero(), truth2 = Vector3::Zero(), slow2 = Vector3::Zero(), total2 = Vector3::Zero();
-  int n = 0;
   for (const auto& s : samples)
   {
     compensator.addSample(toImu(s), &out);
-    if (s.elapsed >= settle)
-    {
-      const Vector3 e = out.position_wave - s.truth.wave_position;
-      error2 += e.cwiseProduct(e);
-      truth2 += s.truth.wave_position.cwiseProduct(s.truth.wave_position);
-      const Vector3 slow = out.position_filtered - (s.truth.slow_position - slow0);
-      const Vector3 total = out.position_filtered + out.position_wave - (s.truth.position - slow0);
-      slow2 += slow.cwiseProduct(slow);
-      total2 += total.cwiseProduct(total);
-      ++n;
-    }
+    scorer.add(s, out.position_filtered, out.position_wave);
   }
-  const sim::Truth& last = samples.back().truth;
-  Errors errors;
-  errors.slow_final = (out.position_filtered - (last.slow_position - slow0)).cwiseAbs();
-  errors.total_final = (out.position_filtered + out.position_wave - (last.position - slow0)).cwiseAbs();
-  for (int i = 0; i < 3; ++i)
-    if (truth2[i] > 0.0)
-      errors.wave_rms_percent[i] = 100.0 * std::sqrt(error2[i] / truth2[i]);
-  if (n > 0)
-  {
-    errors.slow_rms = (slow2 / n).cwiseSqrt();
-    errors.total_rms = (total2 / n).cwiseSqrt();
-  }
-  return errors;
+  return scorer.finish(samples.back(), out.position_filtered, out.position_wave);
 }
 
 /// First-order high-pass filter (bilinear transform), one per axis.
@@ -188,9 +228,7 @@ Errors highPassBaseline(const std::vector<sim::Sample>& samples, double gravity,
   const double rate = (samples.size() - 1) / (samples.back().stamp - samples.front().stamp);
   HighPass hp_a(0.1, rate), hp_v(0.1, rate), hp_p(0.1, rate);
   Vector3 v = Vector3::Zero(), p = Vector3::Zero();
-  const Vector3 slow0 = samples.front().truth.slow_position;
-  Vector3 error2 = Vector3::Zero(), truth2 = Vector3::Zero(), slow2 = Vector3::Zero(), total2 = Vector3::Zero();
-  int n = 0;
+  Scorer scorer(samples.front(), settle);
   Vector3 position = Vector3::Zero();
   for (std::size_t k = 1; k < samples.size(); ++k)
   {
@@ -199,31 +237,9 @@ Errors highPassBaseline(const std::vector<sim::Sample>& samples, double gravity,
     v += hp_a(s.orientation * s.accel - Vector3(0, 0, gravity)) * dt;
     p += hp_v(v) * dt;
     position = hp_p(p);
-    if (s.elapsed >= settle)
-    {
-      const Vector3 e = position - s.truth.wave_position;
-      error2 += e.cwiseProduct(e);
-      truth2 += s.truth.wave_position.cwiseProduct(s.truth.wave_position);
-      const Vector3 slow = s.truth.slow_position - slow0;
-      const Vector3 total = position - (s.truth.position - slow0);
-      slow2 += slow.cwiseProduct(slow);
-      total2 += total.cwiseProduct(total);
-      ++n;
-    }
+    scorer.add(s, Vector3::Zero(), position);
   }
-  const sim::Truth& last = samples.back().truth;
-  Errors errors;
-  errors.slow_final = (last.slow_position - slow0).cwiseAbs();
-  errors.total_final = (position - (last.position - slow0)).cwiseAbs();
-  for (int i = 0; i < 3; ++i)
-    if (truth2[i] > 0.0)
-      errors.wave_rms_percent[i] = 100.0 * std::sqrt(error2[i] / truth2[i]);
-  if (n > 0)
-  {
-    errors.slow_rms = (slow2 / n).cwiseSqrt();
-    errors.total_rms = (total2 / n).cwiseSqrt();
-  }
-  return errors;
+  return scorer.finish(samples.back(), Vector3::Zero(), position);
 }
 
 /// Plain double integration of the level, gravity-free acceleration (no compensation).
@@ -236,12 +252,78 @@ Errors integrateRaw(const std::vector<sim::Sample>& samples, double gravity)
     v += (samples[k].orientation * samples[k].accel - Vector3(0, 0, gravity)) * dt;
     p += v * dt;
   }
-  const sim::Truth& last = samples.back().truth;
-  const Vector3 slow0 = samples.front().truth.slow_position;
-  Errors errors;
-  errors.slow_final = (p - (last.slow_position - slow0)).cwiseAbs();
-  errors.total_final = (p - (last.position - slow0)).cwiseAbs();
-  return errors;
+  return Scorer(samples.front(), 0.0).finish(samples.back(), p, Vector3::Zero());
+}
+
+/// Positions of one odometry topic of a bag (recorded with or without a leading slash), in stamp order, relative to the first.
+struct Track
+{
+  std::vector<double> t;
+  std::vector<Vector3> p;
+
+  /// Linear interpolation; held constant beyond the ends.
+  Vector3 at(double time) const
+  {
+    const auto it = std::upper_bound(t.begin(), t.end(), time);
+    if (it == t.begin())
+      return p.front();
+    if (it == t.end())
+      return p.back();
+    const std::size_t k = it - t.begin();
+    const double w = (time - t[k - 1]) / (t[k] - t[k - 1]);
+    return p[k - 1] + w * (p[k] - p[k - 1]);
+  }
+};
+
+Track readTrack(const rosbag::Bag& bag, const std::string& topic)
+{
+  rosbag::View view(bag, rosbag::TopicQuery(std::vector<std::string>{ topic, "/" + topic }));
+  std::vector<std::pair<double, Vector3>> points;
+  for (const rosbag::MessageInstance& m : view)
+    if (const auto odom = m.instantiate<nav_msgs::Odometry>())
+    {
+      const auto& q = odom->pose.pose.position;
+      points.emplace_back(odom->header.stamp.toSec(), Vector3(q.x, q.y, q.z));
+    }
+  std::stable_sort(points.begin(), points.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  Track track;
+  for (const auto& [t, p] : points)
+    if (track.t.empty() || t > track.t.back())
+    {
+      track.t.push_back(t);
+      track.p.push_back(p - points.front().second);
+    }
+  return track;
+}
+
+/// Another estimator's odometry for this run (slow motion on odometry/filtered, wave motion on
+/// odometry/wave if the bag has it), scored like the methods above.
+Errors scoreEstimate(const std::vector<sim::Sample>& samples, const std::string& path, double settle)
+{
+  rosbag::Bag bag(path, rosbag::bagmode::Read);
+  const Track slow = readTrack(bag, "odometry/filtered");
+  const Track wave = readTrack(bag, "odometry/wave");
+  if (slow.t.size() < 2)
+    throw std::runtime_error(path + ": fewer than two odometry/filtered messages");
+  const double end = samples.back().stamp, start = samples.front().stamp;
+  const double period = (end - start) / (samples.size() - 1);
+  if (slow.t.front() > start + 1.0 || slow.t.back() < end - std::max(1.0, 2 * period))
+    throw std::runtime_error(path + ": odometry/filtered covers " + std::to_string(slow.t.front()) + ".." +
+                             std::to_string(slow.t.back()) + " s, the scenario " + std::to_string(start) + ".." +
+                             std::to_string(end) + " s");
+  auto waveAt = [&](double t) { return wave.t.empty() ? Vector3::Zero() : Vector3(wave.at(t)); };
+  Scorer scorer(samples.front(), settle);
+  for (const auto& s : samples)
+    scorer.add(s, slow.at(s.stamp), waveAt(s.stamp));
+  return scorer.finish(samples.back(), slow.at(end), waveAt(end));
+}
+
+std::string seedPath(std::string pattern, int seed)
+{
+  const std::string key = "{seed}";
+  for (auto at = pattern.find(key); at != std::string::npos; at = pattern.find(key))
+    pattern.replace(at, key.size(), std::to_string(seed));
+  return pattern;
 }
 
 double median(std::vector<double> values)
@@ -302,7 +384,9 @@ int main(int argc, char** argv)
                 << calibrated_bias->transpose() << " m/s^2\n";
     }
 
-    const std::vector<std::string> methods = { "raw", "highpass", "constant", "paper", "default" };
+    std::vector<std::string> methods = { "raw", "highpass", "constant", "paper", "default" };
+    for (const auto& estimate : options.estimates)
+      methods.push_back(estimate.first);
     std::map<std::string, std::vector<Errors>> results;
     for (int seed = 1; seed <= options.seeds; ++seed)
     {
@@ -321,6 +405,8 @@ int main(int argc, char** argv)
       results["constant"].push_back(evaluate(samples, constant, calibrated_bias, options.settle));
       results["paper"].push_back(evaluate(samples, paper, calibrated_bias, options.settle));
       results["default"].push_back(evaluate(samples, ours, std::nullopt, options.settle));
+      for (const auto& [name, pattern] : options.estimates)
+        results[name].push_back(scoreEstimate(samples, seedPath(pattern, seed), options.settle));
     }
     std::cerr << "\n";
 
