@@ -1,0 +1,152 @@
+#!/usr/bin/env python3
+"""Tables and plots of scripts/bench's ROS-side measurements (markdown on stdout, png files).
+
+  bench_report.py nodelet RUNS.txt PNG       nodelet_benchmark lines, each prefixed "label|"
+  bench_report.py bag RUNS.txt CORE.csv      bag_read_floor / compensate_bag lines, core medians
+  bench_report.py memory NODELET.csv BAG_RSS.txt PNG
+"""
+import statistics
+import sys
+
+
+def fields(line):
+    return dict(kv.split('=', 1) for kv in line.split())
+
+
+def nodelet(runs_path, png):
+    rows = []
+    for line in open(runs_path):
+        label, values = line.rstrip('\n').split('|', 1)
+        rows.append((label, fields(values)))
+    print('| transport | input | sent | dropped | input rate [msg/s] | latency p50 [us] | p99 [us] | max [us] |')
+    print('|---|---|---|---|---|---|---|---|')
+    for label, f in rows:
+        print('| %s | %s | %s | %s | %.0f | %.0f | %.0f | %.0f |' % (
+            f['transport'], label, f['sent'], f['dropped'], float(f['input_rate']),
+            float(f['p50_us']), float(f['p99_us']), float(f['max_us'])))
+    print()
+    by = {(f['transport'], label): f for label, f in rows}
+    maxima = {t: float(f['input_rate']) for (t, label), f in by.items() if label.startswith('maximum')}
+    if 'intra' in maxima and 'tcp' in maxima:
+        print('Maximum sustained rate, intra-process / separate process: %.0f / %.0f msg/s = **%.2f**.'
+              % (maxima['intra'], maxima['tcp'], maxima['intra'] / maxima['tcp']))
+    for label in sorted({label for _, label in by if label.endswith('Hz')}):
+        if ('intra', label) in by and ('tcp', label) in by:
+            a, b = by[('intra', label)], by[('tcp', label)]
+            print('Latency p50 at %s, separate process / intra-process: %.0f / %.0f us = **%.1f**.'
+                  % (label, float(b['p50_us']), float(a['p50_us']), float(b['p50_us']) / float(a['p50_us'])))
+    print()
+    import matplotlib
+    matplotlib.use('Agg')
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots(figsize=(8, 3.5))
+    labels = [label for label, f in rows if f['transport'] == 'intra']
+    for i, transport in enumerate(('intra', 'tcp')):
+        for j, label in enumerate(labels):
+            f = by.get((transport, label))
+            if not f:
+                continue
+            x = j + (i - 0.5) * 0.35
+            ax.bar(x, float(f['p99_us']), 0.33, color='C%d' % i, alpha=0.35)
+            ax.bar(x, float(f['p50_us']), 0.33, color='C%d' % i,
+                   label=('intra-process (p50 dark, p99 light)' if transport == 'intra'
+                          else 'separate process, TCP') if j == 0 else None)
+    ax.set_xticks(range(len(labels)))
+    ax.set_xticklabels(labels, fontsize=8)
+    ax.set_yscale('log')
+    ax.set_ylabel('publish to output received [us]')
+    ax.legend(fontsize=8)
+    ax.grid(axis='y', alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(png, dpi=110)
+
+
+def bag(runs_path, core_csv):
+    runs = {'floor': [], 'compensate_bag': []}
+    for line in open(runs_path):
+        label, values = line.rstrip('\n').split('|', 1)
+        runs[label].append(fields(values))
+    messages = int(runs['floor'][0]['messages'])
+    rate = {k: statistics.median(float(r['messages_per_s']) for r in v) for k, v in runs.items()}
+    wall = {k: statistics.median(float(r['wall_s']) for r in v) for k, v in runs.items()}
+    print('| program | IMU messages | wall time [s] (median of %d) | messages per second | ratio to the floor |'
+          % len(runs['floor']))
+    print('|---|---|---|---|---|')
+    print('| read-only floor (`bag_read_floor`) | %d | %.2f | %.3g | 1 |' % (messages, wall['floor'], rate['floor']))
+    print('| `compensate_bag` | %d | %.2f | %.3g | **%.1f** |' % (
+        messages, wall['compensate_bag'], rate['compensate_bag'], rate['floor'] / rate['compensate_bag']))
+    print()
+    # The core against both floors: reading an in-memory array and reading the bag.
+    core = {}
+    for r in open(core_csv):
+        cells = r.split(',')
+        name = cells[0].strip('"').replace('_median', '')
+        if len(cells) > 6 and cells[6]:
+            core[name] = float(cells[6])
+    print('| core benchmark | samples per second | ns per sample | ratio to the in-memory floor | ratio to the bag floor |')
+    print('|---|---|---|---|---|')
+    for name, items in core.items():
+        if not name.startswith('compensate/'):
+            continue
+        scenario = name.split('/')[1].rsplit('_', 1)[0]
+        memory = core.get('readFloor/' + scenario)
+        print('| %s | %.3g | %.0f | %s | %.2f |' % (name, items, 1e9 / items,
+              '%.0f' % (memory / items) if memory else '-', rate['floor'] / items))
+    print()
+
+
+def memory(nodelet_csv, bag_rss, png):
+    import csv
+    rows = list(csv.DictReader(open(nodelet_csv)))
+    hours = [float(r['data_hours']) for r in rows]
+    rss = [float(r['rss_kb']) / 1024 for r in rows]
+    wall = [float(r['wall_s']) for r in rows]
+    outputs = [int(r['outputs']) for r in rows]
+    cost = [1e6 * (wall[i] - wall[i - 1]) / (outputs[i] - outputs[i - 1]) for i in range(1, len(rows))]
+    print('| point | data time [h] | RSS [MB] | cost per message over the last block [us] |')
+    print('|---|---|---|---|')
+    for name, i in (('start', 1), ('middle', len(rows) // 2), ('end', len(rows) - 1)):
+        print('| %s | %.2f | %.1f | %.1f |' % (name, hours[i], rss[i], cost[i - 1]))
+    print()
+    print('RSS from the first to the last sample: %.1f -> %.1f MB (%+.1f MB), max %.1f MB; '
+          'cost per message: median of the first tenth %.1f us, of the last tenth %.1f us.'
+          % (rss[0], rss[-1], rss[-1] - rss[0], max(rss), statistics.median(cost[:len(cost) // 10 or 1]),
+             statistics.median(cost[-(len(cost) // 10 or 1):])))
+    print()
+    bag_t, bag_rss_mb = [], []
+    for line in open(bag_rss):
+        t, kb = line.split()
+        bag_t.append(float(t))
+        bag_rss_mb.append(float(kb) / 1024)
+    import matplotlib
+    matplotlib.use('Agg')
+    import matplotlib.pyplot as plt
+    fig, axes = plt.subplots(1, 3, figsize=(12, 3.4))
+    axes[0].plot(hours, rss)
+    axes[0].set_xlabel('data time [h]')
+    axes[0].set_ylabel('RSS [MB]')
+    axes[0].set_ylim(0, max(rss) * 1.2)
+    axes[0].set_title('nodelet in-process, fed at full speed', fontsize=9)
+    axes[1].plot(hours[1:], cost, lw=0.6)
+    axes[1].set_xlabel('data time [h]')
+    axes[1].set_ylabel('wall time per message [us]')
+    axes[1].set_ylim(0, statistics.median(cost) * 3)
+    axes[1].set_title('cost per message (per minute of data)', fontsize=9)
+    if bag_t:
+        axes[2].plot(bag_t, bag_rss_mb)
+        axes[2].set_ylim(0, max(bag_rss_mb) * 1.2)
+    axes[2].set_xlabel('wall time [s]')
+    axes[2].set_ylabel('RSS [MB]')
+    axes[2].set_title('compensate_bag on the long bag', fontsize=9)
+    for ax in axes:
+        ax.grid(alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(png, dpi=110)
+    if bag_rss_mb:
+        print('`compensate_bag` on the long bag: RSS %.1f MB after %.1f s, %.1f MB at the end (%.1f s).'
+              % (bag_rss_mb[0], bag_t[0], bag_rss_mb[-1], bag_t[-1]))
+        print()
+
+
+if __name__ == '__main__':
+    {'nodelet': nodelet, 'bag': bag, 'memory': memory}[sys.argv[1]](*sys.argv[2:])

@@ -1,0 +1,420 @@
+// nodelet_benchmark: input rate, drops and latency of the compensator, in the same nodelet
+// manager as a publisher (intra-process, zero-copy shared pointers) or as a separate process
+// (compensator_node over TCP, started by the caller). Run by scripts/bench, not a test.
+//
+//   nodelet_benchmark --transport intra|tcp --scenario FILE.yaml --rate HZ --duration S
+//                     [--closed-loop] [--stream] [--rss-csv FILE] [--rss-every N]
+//
+// This program is the nodelet manager: a nodelet::Loader holding BenchSource (below) and, for
+// `intra`, the compensator nodelet loaded through pluginlib as `nodelet load` would. BenchSource
+// publishes imu/data from the scenario simulated at HZ, stamped t0 + k / HZ, and subscribes
+// odometry/filtered, whose stamp is the input's: k gives the publish time kept here (latency =
+// output received - input published, steady clock) and the drops (inputs without an output).
+// Paced (default): inputs at HZ for S seconds. --closed-loop: as fast as the compensator takes
+// them, at most kInFlight unanswered (its queue holds 1000), for S seconds of data. Samples are
+// simulated once (up to kCachedSamples, then replayed with new stamps) unless --stream
+// simulates each one (long runs; with --rss-csv the process RSS is written every N outputs).
+// Output: one line of key=value pairs on stdout.
+#include <algorithm>
+#include <array>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <condition_variable>
+#include <cstdint>
+#include <fstream>
+#include <iostream>
+#include <memory>
+#include <mutex>
+#include <stdexcept>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <nav_msgs/Odometry.h>
+#include <nodelet/loader.h>
+#include <nodelet/nodelet.h>
+#include <pluginlib/class_loader.hpp>
+#include <ros/ros.h>
+#include <sensor_msgs/Imu.h>
+#include <unistd.h>
+
+#include "periodic_bias_compensation/ros/sim_messages.h"
+#include "periodic_bias_compensation/sim/simulator.h"
+
+namespace pbc = periodic_bias_compensation;
+namespace sim = periodic_bias_compensation::sim;
+using Clock = std::chrono::steady_clock;
+
+namespace
+{
+constexpr std::int64_t kInFlight = 500;          ///< closed loop: unanswered inputs at most
+constexpr std::size_t kCachedSamples = 60000;    ///< samples simulated once and replayed
+constexpr std::size_t kRing = std::size_t(1) << 20;  ///< publish times kept (ring, by k)
+constexpr std::uint32_t kStampSec = 1700000000;  ///< t0 [s], a Unix-like time
+
+struct Options
+{
+  std::string transport;
+  std::string scenario;
+  double rate = 0.0;      ///< [Hz]
+  double duration = 0.0;  ///< [s] of data
+  bool closed_loop = false;
+  bool stream = false;
+  std::string rss_csv;
+  std::int64_t rss_every = 6000;
+};
+
+/// Latency histogram with constant memory: bins of 1/100 decade from 1 ns to 100 s.
+class Histogram
+{
+public:
+  void add(double seconds)
+  {
+    const double ns = std::max(seconds * 1e9, 1.0);
+    ++bins_[std::min<std::size_t>(kBins - 1, static_cast<std::size_t>(std::log10(ns) * 100.0))];
+    ++count_;
+  }
+  /// Upper edge of the bin holding quantile q [s] (resolution 2.3 %); NaN when empty.
+  double quantile(double q) const
+  {
+    std::uint64_t seen = 0;
+    const auto target = static_cast<std::uint64_t>(std::ceil(q * static_cast<double>(count_)));
+    for (std::size_t i = 0; i < kBins; ++i)
+    {
+      seen += bins_[i];
+      if (count_ > 0 && seen >= std::max<std::uint64_t>(target, 1))
+      {
+        return std::pow(10.0, static_cast<double>(i + 1) / 100.0) * 1e-9;
+      }
+    }
+    return std::nan("");
+  }
+
+private:
+  static constexpr std::size_t kBins = 1100;
+  std::array<std::uint64_t, kBins> bins_{};
+  std::uint64_t count_ = 0;
+};
+
+long rssKilobytes()
+{
+  std::ifstream statm("/proc/self/statm");
+  long pages = 0, resident = 0;
+  statm >> pages >> resident;
+  return resident * (sysconf(_SC_PAGESIZE) / 1024);
+}
+
+/// The scenario's IMU messages at `rate`, frame base_link (identity mounting, no tf needed).
+class SampleSource
+{
+public:
+  explicit SampleSource(const Options& o) : stream_(o.stream)
+  {
+    sim::Scenario scenario = sim::loadScenario(o.scenario);
+    scenario.rate = o.rate;
+    scenario.duration = o.duration;
+    simulator_ = std::make_unique<sim::Simulator>(scenario, scenario.seed);
+    builder_ = std::make_unique<pbc::SimMessageBuilder>(simulator_->scenario());
+    if (!stream_)
+    {
+      sensor_msgs::Imu imu;
+      while (cache_.size() < kCachedSamples && simulate(&imu))
+      {
+        cache_.push_back(imu);
+      }
+      if (cache_.empty())
+      {
+        throw std::runtime_error("the scenario gave no IMU sample");
+      }
+    }
+  }
+
+  /// Message k (stamp set by the caller); false when a streamed scenario is over.
+  bool get(std::int64_t k, sensor_msgs::Imu* imu)
+  {
+    if (!stream_)
+    {
+      *imu = cache_[static_cast<std::size_t>(k) % cache_.size()];
+      return true;
+    }
+    return simulate(imu);
+  }
+
+private:
+  bool simulate(sensor_msgs::Imu* imu)
+  {
+    sim::Sample sample;
+    while (simulator_->next(&sample))
+    {
+      builder_->build(sample, &messages_);
+      if (messages_.has_imu)
+      {
+        *imu = messages_.imu;
+        imu->header.frame_id = "base_link";
+        return true;
+      }
+    }
+    return false;
+  }
+
+  bool stream_;
+  std::unique_ptr<sim::Simulator> simulator_;
+  std::unique_ptr<pbc::SimMessageBuilder> builder_;
+  pbc::SimMessages messages_;
+  std::vector<sensor_msgs::Imu> cache_;
+};
+
+/// Publisher of imu/data and receiver of odometry/filtered, as a nodelet of the same manager.
+class BenchSource : public nodelet::Nodelet
+{
+public:
+  explicit BenchSource(const Options& o) : options_(o), published_(kRing) {}
+
+  ~BenchSource() override
+  {
+    stop_ = true;
+    if (thread_.joinable())
+    {
+      thread_.join();
+    }
+  }
+
+  /// Waits until every input was sent and answered (or nothing came back for 3 s), then prints.
+  void finish()
+  {
+    thread_.join();
+    std::int64_t last = -1;
+    auto last_change = Clock::now();
+    while (Clock::now() - last_change < std::chrono::seconds(3))
+    {
+      {
+        std::lock_guard<std::mutex> lock(mutex_);
+        if (received_ >= sent_)
+        {
+          break;
+        }
+        if (received_ != last)
+        {
+          last = received_;
+          last_change = Clock::now();
+        }
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+    sub_.shutdown();  // before the manager's callback queues go
+    pub_.shutdown();
+    std::lock_guard<std::mutex> lock(mutex_);
+    const double wall = std::chrono::duration<double>(end_ - start_).count();
+    std::cout << "transport=" << options_.transport << " mode=" << (options_.closed_loop ? "closed" : "paced")
+              << " rate=" << options_.rate << " sent=" << sent_ << " received=" << received_
+              << " dropped=" << sent_ - received_ << " send_wall_s=" << wall
+              << " input_rate=" << static_cast<double>(sent_) / wall
+              << " p50_us=" << latency_.quantile(0.5) * 1e6 << " p99_us=" << latency_.quantile(0.99) * 1e6
+              << " max_us=" << max_latency_ * 1e6 << " rss_kb=" << rssKilobytes() << std::endl;
+    if (!options_.rss_csv.empty())
+    {
+      std::ofstream csv(options_.rss_csv);
+      csv << "data_hours,outputs,rss_kb,wall_s\n";
+      for (const auto& r : rss_)
+      {
+        csv << r.data_hours << ',' << r.outputs << ',' << r.rss_kb << ',' << r.wall_s << '\n';
+      }
+    }
+  }
+
+private:
+  struct RssRow
+  {
+    double data_hours;
+    std::int64_t outputs;
+    long rss_kb;
+    double wall_s;
+  };
+
+  void onInit() override
+  {
+    source_ = std::make_unique<SampleSource>(options_);
+    ros::NodeHandle nh = getNodeHandle();
+    pub_ = nh.advertise<sensor_msgs::Imu>("imu/data", 1000);
+    sub_ = nh.subscribe("odometry/filtered", 10000, &BenchSource::outputCallback, this,
+                        ros::TransportHints().tcpNoDelay());
+    thread_ = std::thread([this] { run(); });
+  }
+
+  ros::Time stampOf(std::int64_t k) const
+  {
+    return ros::Time(kStampSec, 0) + ros::Duration(static_cast<double>(k) / options_.rate);
+  }
+
+  void run()
+  {
+    while (!stop_ && (pub_.getNumSubscribers() == 0 || sub_.getNumPublishers() == 0))
+    {
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(500));  // connections settle
+    const auto count = static_cast<std::int64_t>(std::llround(options_.duration * options_.rate));
+    start_ = Clock::now();
+    std::int64_t lost = 0;  // closed loop: inputs given up after a second without an answer
+    for (std::int64_t k = 0; k < count && !stop_; ++k)
+    {
+      auto imu = boost::make_shared<sensor_msgs::Imu>();
+      if (!source_->get(k, imu.get()))
+      {
+        break;
+      }
+      imu->header.stamp = stampOf(k);
+      if (options_.closed_loop)
+      {
+        std::unique_lock<std::mutex> lock(mutex_);
+        if (!answered_.wait_for(lock, std::chrono::seconds(1), [&] { return sent_ - received_ - lost < kInFlight; }))
+        {
+          lost = sent_ - received_;
+        }
+      }
+      else
+      {
+        std::this_thread::sleep_until(start_ + std::chrono::nanoseconds(static_cast<std::int64_t>(1e9 * k / options_.rate)));
+      }
+      {
+        std::lock_guard<std::mutex> lock(mutex_);
+        published_[static_cast<std::size_t>(k) % kRing] = Clock::now();
+        ++sent_;
+      }
+      pub_.publish(imu);  // zero-copy to a subscriber in this process
+    }
+    std::lock_guard<std::mutex> lock(mutex_);
+    end_ = Clock::now();
+  }
+
+  void outputCallback(const nav_msgs::Odometry::ConstPtr& msg)
+  {
+    const auto now = Clock::now();
+    const auto k = static_cast<std::int64_t>(std::llround((msg->header.stamp - ros::Time(kStampSec, 0)).toSec() * options_.rate));
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (k >= 0 && k < sent_ && sent_ - k <= static_cast<std::int64_t>(kRing))
+    {
+      const double latency = std::chrono::duration<double>(now - published_[static_cast<std::size_t>(k) % kRing]).count();
+      latency_.add(latency);
+      max_latency_ = std::max(max_latency_, latency);
+    }
+    ++received_;
+    if (options_.rss_every > 0 && received_ % options_.rss_every == 0 && !options_.rss_csv.empty())
+    {
+      rss_.push_back({ static_cast<double>(k) / options_.rate / 3600.0, received_, rssKilobytes(),
+                       std::chrono::duration<double>(now - start_).count() });
+      if (rss_.size() % 60 == 0)
+      {
+        std::cerr << "[nodelet_benchmark] " << rss_.back().data_hours << " h of data, RSS " << rss_.back().rss_kb
+                  << " kB" << std::endl;
+      }
+    }
+    answered_.notify_one();
+  }
+
+  Options options_;
+  std::unique_ptr<SampleSource> source_;
+  ros::Publisher pub_;
+  ros::Subscriber sub_;
+  std::thread thread_;
+  std::atomic<bool> stop_{ false };
+
+  std::mutex mutex_;  ///< guards everything below
+  std::vector<Clock::time_point> published_;  ///< by k, in a ring
+  std::condition_variable answered_;
+  std::int64_t sent_ = 0;
+  std::int64_t received_ = 0;
+  Clock::time_point start_, end_;
+  Histogram latency_;
+  double max_latency_ = 0.0;
+  std::vector<RssRow> rss_;
+};
+
+Options parseOptions(int argc, char** argv)
+{
+  Options o;
+  for (int i = 1; i < argc; ++i)
+  {
+    const std::string arg = argv[i];
+    const auto value = [&]() -> std::string {
+      if (i + 1 >= argc)
+      {
+        throw std::runtime_error(arg + " needs a value");
+      }
+      return argv[++i];
+    };
+    if (arg == "--transport")
+      o.transport = value();
+    else if (arg == "--scenario")
+      o.scenario = value();
+    else if (arg == "--rate")
+      o.rate = std::stod(value());
+    else if (arg == "--duration")
+      o.duration = std::stod(value());
+    else if (arg == "--closed-loop")
+      o.closed_loop = true;
+    else if (arg == "--stream")
+      o.stream = true;
+    else if (arg == "--rss-csv")
+      o.rss_csv = value();
+    else if (arg == "--rss-every")
+      o.rss_every = std::stoll(value());
+    else
+      throw std::runtime_error("unknown argument " + arg);
+  }
+  if ((o.transport != "intra" && o.transport != "tcp") || o.scenario.empty() || !(o.rate > 0.0) ||
+      !(o.duration > 0.0))
+  {
+    throw std::runtime_error("usage: nodelet_benchmark --transport intra|tcp --scenario FILE.yaml --rate HZ "
+                             "--duration S [--closed-loop] [--stream] [--rss-csv FILE] [--rss-every N]");
+  }
+  return o;
+}
+}  // namespace
+
+int main(int argc, char** argv)
+{
+  ros::init(argc, argv, "nodelet_benchmark");
+  Options options;
+  try
+  {
+    options = parseOptions(argc, argv);
+  }
+  catch (const std::exception& e)
+  {
+    std::cerr << e.what() << std::endl;
+    return 2;
+  }
+  try
+  {
+    auto source = boost::make_shared<BenchSource>(options);
+    pluginlib::ClassLoader<nodelet::Nodelet> plugins("nodelet", "nodelet::Nodelet");
+    nodelet::Loader manager([&](const std::string& type) -> boost::shared_ptr<nodelet::Nodelet> {
+      if (type == "bench/BenchSource")
+      {
+        return source;
+      }
+      return plugins.createInstance(type);
+    });
+    const nodelet::M_string no_remappings;
+    const nodelet::V_string no_argv;
+    if (options.transport == "intra" &&
+        !manager.load("/compensator", "periodic_bias_compensation/CompensatorNodelet", no_remappings, no_argv))
+    {
+      throw std::runtime_error("the compensator nodelet did not load");
+    }
+    if (!manager.load("/bench_source", "bench/BenchSource", no_remappings, no_argv))
+    {
+      throw std::runtime_error("the benchmark source did not load");
+    }
+    source->finish();
+    manager.clear();
+  }
+  catch (const std::exception& e)
+  {
+    std::cerr << "nodelet_benchmark: " << e.what() << std::endl;
+    return 1;
+  }
+  return 0;
+}
