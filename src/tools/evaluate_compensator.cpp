@@ -55,7 +55,7 @@ void usage(std::ostream& out)
          "--estimate adds a method NAME scored on the odometry another estimator wrote for the same\n"
          "scenario and seed: BAG_PATTERN with {seed} replaced by the seed; its odometry/filtered is the\n"
          "slow motion (linearly interpolated to the samples) and its odometry/wave, if present, the\n"
-         "wave motion (zero otherwise); positions relative to the estimator's start.\n";
+         "wave motion (zero otherwise); positions as published (the estimator starts at zero).\n";
 }
 
 std::optional<Options> parse(int argc, char** argv)
@@ -255,7 +255,7 @@ Errors integrateRaw(const std::vector<sim::Sample>& samples, double gravity)
   return Scorer(samples.front(), 0.0).finish(samples.back(), p, Vector3::Zero());
 }
 
-/// Positions of one odometry topic of a bag (recorded with or without a leading slash), in stamp order, relative to the first.
+/// Positions of one odometry topic of a bag (recorded with or without a leading slash), in stamp order.
 struct Track
 {
   std::vector<double> t;
@@ -291,7 +291,7 @@ Track readTrack(const rosbag::Bag& bag, const std::string& topic)
     if (track.t.empty() || t > track.t.back())
     {
       track.t.push_back(t);
-      track.p.push_back(p - points.front().second);
+      track.p.push_back(p);
     }
   return track;
 }
@@ -307,7 +307,7 @@ Errors scoreEstimate(const std::vector<sim::Sample>& samples, const std::string&
     throw std::runtime_error(path + ": fewer than two odometry/filtered messages");
   const double end = samples.back().stamp, start = samples.front().stamp;
   const double period = (end - start) / (samples.size() - 1);
-  if (slow.t.front() > start + 1.0 || slow.t.back() < end - std::max(1.0, 2 * period))
+  if (slow.t.front() > start + settle || slow.t.back() < end - std::max(1.0, 2 * period))
     throw std::runtime_error(path + ": odometry/filtered covers " + std::to_string(slow.t.front()) + ".." +
                              std::to_string(slow.t.back()) + " s, the scenario " + std::to_string(start) + ".." +
                              std::to_string(end) + " s");
