@@ -6,6 +6,8 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include "periodic_bias_compensation/core/compensator.h"
+
 namespace periodic_bias_compensation
 {
 bool loadCalibration(const std::string& path, Eigen::Vector3d* bias, std::string* why)
@@ -42,8 +44,9 @@ bool loadCalibration(const std::string& path, Eigen::Vector3d* bias, std::string
     {
       return fail("key 'constant_bias' element " + std::to_string(i) + " is not a number");
     }
-    if (!std::isfinite(value[i]) || std::abs(value[i]) > 50.0)
-      return fail("key 'constant_bias' element " + std::to_string(i) + " must be finite and within +-50 m/s^2");
+    if (!std::isfinite(value[i]) || std::abs(value[i]) > kMaxConstantBias)
+      return fail("key 'constant_bias' element " + std::to_string(i) + " must be finite and within +-" +
+                  std::to_string(static_cast<int>(kMaxConstantBias)) + " m/s^2");
   }
   *bias = value;
   return true;

@@ -255,10 +255,26 @@ std::string toString(SampleStatus status)
       return "rejected: zero or non-unit orientation quaternion";
     case SampleStatus::kRejectedDuplicate:
       return "rejected: duplicated stamp";
+    case SampleStatus::kRejectedOutOfRange:
+      return "rejected: acceleration or angular rate out of range";
     case SampleStatus::kResetBackwards:
       return "reset: stamp went backwards";
     case SampleStatus::kGapReset:
       return "reset: gap in the samples";
+  }
+  return "unknown";
+}
+
+std::string toString(LevelSource source)
+{
+  switch (source)
+  {
+    case LevelSource::kNone:
+      return "none needed yet";
+    case LevelSource::kGravity:
+      return "gravity direction of the calibration window";
+    case LevelSource::kAttitudeBeforeLoss:
+      return "mean IMU orientation before it stopped";
   }
   return "unknown";
 }
@@ -374,6 +390,12 @@ public:
       ++counters_.rejected_non_finite;
       return SampleStatus::kRejectedNonFinite;
     }
+    if ((sample.specific_force.cwiseAbs().array() > kMaxSpecificForce).any() ||
+        (sample.angular_rate.cwiseAbs().array() > kMaxAngularRate).any())
+    {
+      ++counters_.rejected_out_of_range;
+      return SampleStatus::kRejectedOutOfRange;
+    }
     ImuSample s = sample;
     if (s.has_orientation)
     {
@@ -418,11 +440,7 @@ public:
     last_t_ = s.t;
     ++counters_.accepted;
 
-    if (!has_level_ && !s.has_orientation)
-    {
-      level_ = levelFromSpecificForce(s.specific_force);
-      has_level_ = true;
-    }
+    updateLevel(s, dt);
     CompensatorOutput output;
     if (needsCalibration())
     {
@@ -450,6 +468,9 @@ public:
     counters_.sample_rate = 0.0;
     has_level_ = false;
     level_calibrated_ = false;
+    level_source_ = LevelSource::kNone;
+    attitude_samples_ = 0;
+    orientation_lost_ = false;
     calibration_buffer_.clear();
     if (!bias_from_file_)
     {
@@ -470,7 +491,7 @@ public:
 
   bool setConstantBias(const Vector3& bias)
   {
-    if (!isFinite(bias))
+    if (!isFinite(bias) || (bias.cwiseAbs().array() > kMaxConstantBias).any())
       return false;
     constant_bias_ = bias;
     bias_from_file_ = true;
@@ -497,6 +518,10 @@ public:
   Quaternion levelOrientation() const
   {
     return level_;
+  }
+  LevelSource levelSource() const
+  {
+    return level_source_;
   }
   const CompensatorCounters& counters() const
   {
@@ -582,6 +607,41 @@ private:
     since_analysis_ = 0;
   }
 
+  /// Level frame for samples without orientation. While the IMU gives orientation its mean over
+  /// kAttitudeMemory is kept; when it stops, that mean is used (the hull's roll and pitch at one
+  /// instant would tilt the frame by the wave motion). Without any orientation seen, the
+  /// gravity direction: one sample until the calibration window has been averaged.
+  void updateLevel(const ImuSample& s, double dt)
+  {
+    if (s.has_orientation)
+    {
+      // Running mean of unit quaternions (close together: the normalised component mean),
+      // a plain mean for the first samples, then exponential forgetting.
+      Quaternion q = s.orientation;
+      if (attitude_samples_ > 0 && q.coeffs().dot(attitude_.coeffs()) < 0.0)
+        q.coeffs() *= -1.0;
+      ++attitude_samples_;
+      const double weight = std::max(1.0 - std::exp(-dt / kAttitudeMemory), 1.0 / attitude_samples_);
+      attitude_.coeffs() = attitude_samples_ == 1 ? q.coeffs() : (attitude_.coeffs() + weight * (q.coeffs() - attitude_.coeffs())).eval();
+      attitude_.normalize();
+      orientation_lost_ = false;
+      return;
+    }
+    if (attitude_samples_ > 0 && !orientation_lost_)
+    {
+      level_ = attitude_;
+      has_level_ = true;
+      level_source_ = LevelSource::kAttitudeBeforeLoss;
+    }
+    else if (!has_level_)
+    {
+      level_ = levelFromSpecificForce(s.specific_force);
+      has_level_ = true;
+      level_source_ = LevelSource::kGravity;
+    }
+    orientation_lost_ = true;
+  }
+
   Vector3 levelAcceleration(const ImuSample& s)
   {
     last_had_orientation_ = s.has_orientation;
@@ -601,8 +661,11 @@ private:
       any_without_orientation |= !b.sample.has_orientation;
     }
     mean_force /= static_cast<double>(calibration_buffer_.size());
-    if (any_without_orientation)
+    if (any_without_orientation && level_source_ != LevelSource::kAttitudeBeforeLoss)
+    {
       level_ = levelFromSpecificForce(mean_force);
+      level_source_ = LevelSource::kGravity;
+    }
     level_calibrated_ = true;
 
     std::array<FrequencyEstimate, 3> window_frequency;
@@ -887,7 +950,8 @@ private:
   void stepPaper(AxisEstimator& axis, double compensated, double dt, int i, CompensatorOutput* out)
   {
     const int period = axis.locked && rate_ > 0.0 ? static_cast<int>(std::lround(rate_ / axis.frequency)) : 0;
-    const bool periodic = config_.enable_periodic && period >= 2 && axis.v_table.size() >= period &&
+    out->axes[i].period_too_short = config_.enable_periodic && axis.locked && period < kMinPaperPeriod;
+    const bool periodic = config_.enable_periodic && period >= kMinPaperPeriod && axis.v_table.size() >= period &&
                           period <= axis.v_table.capacity();
     const AxisGains& g = config_.gains[i];
 
@@ -947,6 +1011,10 @@ private:
 
   bool has_level_ = false;
   bool level_calibrated_ = false;
+  LevelSource level_source_ = LevelSource::kNone;
+  Quaternion attitude_ = Quaternion::Identity();  ///< mean IMU orientation (updateLevel)
+  long attitude_samples_ = 0;
+  bool orientation_lost_ = false;  ///< the last sample had no orientation
   bool last_had_orientation_ = false;
   Quaternion level_ = Quaternion::Identity();
 
@@ -998,6 +1066,10 @@ Vector3 Compensator::constantBias() const
 Quaternion Compensator::levelOrientation() const
 {
   return impl_->levelOrientation();
+}
+LevelSource Compensator::levelSource() const
+{
+  return impl_->levelSource();
 }
 const CompensatorCounters& Compensator::counters() const
 {

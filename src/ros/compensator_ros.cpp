@@ -244,6 +244,7 @@ void CompensatorRos::imuCallback(const sensor_msgs::Imu::ConstPtr& msg)
     case SampleStatus::kRejectedNonFinite:
     case SampleStatus::kRejectedBadQuaternion:
     case SampleStatus::kRejectedDuplicate:
+    case SampleStatus::kRejectedOutOfRange:
       ROS_WARN_THROTTLE(kWarnPeriod, "imu/data: sample at t = %.3f s dropped: %s", sample.t, toString(status).c_str());
       return;
     case SampleStatus::kResetBackwards:
@@ -553,8 +554,21 @@ void CompensatorRos::diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat)
   }
   if (seen_orientation_ && !has_orientation_ && counters_.received > 0)
   {
-    raise(DiagnosticStatus::WARN, "IMU orientation missing: levelling with the gravity direction measured at "
-                                  "start (roll and pitch of the hull leak into the level axes)");
+    raise(DiagnosticStatus::WARN, "IMU orientation missing: levelling with the " +
+                                      toString(compensator_->levelSource()) +
+                                      " (roll and pitch of the hull leak into the level axes)");
+  }
+  for (int i = 0; i < 3; ++i)
+  {
+    if (has_output_ && last_output_.axes[i].period_too_short)
+    {
+      char text[200];
+      std::snprintf(text, sizeof text,
+                    "period of %.1f samples on %s is shorter than %d: paper-mode periodic correction off there "
+                    "(raise the IMU rate or lower max_frequency)",
+                    last_output_.axes[i].period_samples, kAxisNames[i], kMinPaperPeriod);
+      raise(DiagnosticStatus::WARN, text);
+    }
   }
   if (mounting_state_ == MountingState::kFallback)
   {
@@ -604,7 +618,8 @@ void CompensatorRos::diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat)
   stat.add("accepted without orientation", counters_.without_orientation);
   stat.add("orientation", !seen_orientation_ ? std::string("none in the input: levelled with gravity")
                                              : (has_orientation_ ? std::string("from the IMU message")
-                                                                 : std::string("missing: levelled with gravity")));
+                                                                 : "missing: levelled with the " +
+                                                                       toString(compensator_->levelSource())));
   stat.add("refused reconfigures", counters_.refused_reconfigures);
   if (!last_refusal_.empty())
   {

@@ -246,3 +246,156 @@ TEST(BadInput, InvalidConfigurationIsRefusedAndTheEstimateKept)
   }
   EXPECT_EQ(a.position_wave, b.position_wave);
 }
+
+TEST(BadInput, AbsurdFiniteForceOrRateIsRejectedAndCounted)
+{
+  // F3 (docs/reliability.md): a finite specific force of 1e232 m/s^2 used to be integrated and
+  // overflow the state. Any caller now gets it refused by the core, the estimate unharmed.
+  const auto r = record();
+  Compensator c, reference;
+  feed(c, r, 0, 1500);
+  feed(reference, r, 0, 1500);
+  int n = 0;
+  for (int field = 0; field < 4; ++field)
+  {
+    pbc::ImuSample s = r.samples[1500];
+    s.t -= 0.5 / 87.7;  // between two good samples
+    if (field == 0)
+      s.specific_force.z() = -3.9e232;
+    else if (field == 1)
+      s.specific_force.x() = 2000.5;
+    else if (field == 2)
+      s.angular_rate.y() = 1e300;
+    else
+      s.angular_rate.x() = -100.5;
+    CompensatorOutput out;
+    EXPECT_EQ(c.addSample(s, &out), SampleStatus::kRejectedOutOfRange) << "field " << field;
+    ++n;
+  }
+  EXPECT_EQ(c.counters().rejected_out_of_range, static_cast<unsigned>(n));
+  EXPECT_EQ(c.counters().accepted, reference.counters().accepted);
+  CompensatorOutput a, b;
+  for (std::size_t k = 1500; k < r.samples.size(); ++k)
+  {
+    ASSERT_EQ(c.addSample(r.samples[k], &a), SampleStatus::kAccepted);
+    reference.addSample(r.samples[k], &b);
+  }
+  EXPECT_EQ(a.position_wave, b.position_wave);
+  EXPECT_EQ(a.position_filtered, b.position_filtered);
+  // The limits themselves are accepted.
+  pbc::ImuSample edge = r.samples.back();
+  edge.t += 1.0 / 87.7;
+  edge.specific_force.x() = pbc::kMaxSpecificForce;
+  edge.angular_rate.z() = -pbc::kMaxAngularRate;
+  EXPECT_EQ(c.addSample(edge, &a), SampleStatus::kAccepted);
+}
+
+TEST(BadInput, AbsurdConstantBiasIsRefused)
+{
+  // F8 and F8b: the fuzzer's setConstantBias(-1.8e298) and (-2.5e260) were accepted (only
+  // non-finite values were refused) and the next output overflowed.
+  const auto r = record();
+  Compensator c;
+  feed(c, r, 0, 1500);
+  const Vector3 before = c.constantBias();
+  EXPECT_FALSE(c.setConstantBias(Vector3(-0.06, -1.8e298, -0.08)));
+  EXPECT_FALSE(c.setConstantBias(Vector3(-2.5e260, 4.7e-307, -0.1)));
+  EXPECT_FALSE(c.setConstantBias(Vector3(0.0, 0.0, pbc::kMaxConstantBias + 0.5)));
+  EXPECT_EQ(c.constantBias(), before);
+  feed(c, r, 1500, 500);
+  EXPECT_TRUE(c.setConstantBias(Vector3(0.1, -0.2, pbc::kMaxConstantBias)));
+  feed(c, r, 2000, 500);
+}
+
+namespace
+{
+/// Paper-mode run on a 1 Hz surge oscillation sampled at L samples per period, the same gains on
+/// every axis. Returns how much the largest |position| (filtered or wave) grew over the last
+/// 100 s against the 100 s before (Inf if an output was not finite): an unstable comb loop grows
+/// exponentially (x1e3 and more per 100 s, then overflows); integrated noise and bias residuals
+/// (paper mode bounds neither) grow like t^1.5..t^2, less than x2.3 from 200 to 300 s.
+/// *short_flag: an output was flagged period_too_short.
+double paperGrowth(int samples_per_period, const pbc::AxisGains& gains, bool* short_flag)
+{
+  pbc::test::Shake shake;
+  shake.rate = samples_per_period * 1.0;
+  shake.frequency = Vector3(1.0, 1.0, 1.0);
+  shake.amplitude = Vector3(0.1, 0.05, 0.02);
+  shake.duration = 300.0;
+  const auto r = pbc::test::makeShake(shake);
+  CompensatorConfig config;
+  config.mode = pbc::Mode::kPaper;
+  config.gains = { gains, gains, gains };
+  Compensator c(config);
+  CompensatorOutput out;
+  double middle = 0.0, last = 0.0;
+  *short_flag = false;
+  for (const auto& s : r.samples)
+  {
+    c.addSample(s, &out);
+    if (!finiteOutput(out))
+      return std::numeric_limits<double>::infinity();
+    const double size = std::max(out.position_filtered.norm(), out.position_wave.norm());
+    const double t = s.t - r.samples.front().t;
+    (t < 200.0 ? middle : last) = std::max(t < 100.0 ? 0.0 : (t < 200.0 ? middle : last), size);
+    for (const auto& a : out.axes)
+      *short_flag = *short_flag || a.period_too_short;
+  }
+  std::printf("L %d gains %.2f %.2f %.2f %.2f: largest |position| %.3g m at 100-200 s, %.3g m at 200-300 s\n",
+              samples_per_period, gains.alpha_v, gains.alpha_p, gains.beta_v, gains.beta_p, middle, last);
+  return last / middle;
+}
+}  // namespace
+
+TEST(BadInput, PaperModeShortPeriodSwitchesTheCorrectionOffInsteadOfDiverging)
+{
+  // F5: alpha_p 1.52, beta_p 10.4 (accepted by validate) diverged to Inf at L ~ 2.3 samples. At
+  // L = 2 the comb loop is linear and stable only for |alpha/2 - beta/4| < 1; under
+  // kMinPaperPeriod the correction is now off (flagged), from it on every corner of the accepted
+  // gains stays bounded (the homogeneous loop was scanned over alpha 0..1.99, beta 0..12 for L
+  // = 2..40, 50, 100, 200: docs/reliability.md).
+  bool short_flag = false;
+  const pbc::AxisGains f5{ 1.0, 1.52, 8.7, 10.4 };
+  for (int l = 2; l < pbc::kMinPaperPeriod; ++l)
+  {
+    EXPECT_LT(paperGrowth(l, f5, &short_flag), 3.0) << "L = " << l;
+    EXPECT_TRUE(short_flag) << "L = " << l;
+  }
+  for (int l = pbc::kMinPaperPeriod; l <= pbc::kMinPaperPeriod + 4; ++l)
+    for (double alpha : { 0.0, 1.0, 1.99 })
+      for (double beta : { 0.0, 6.0, 12.0 })
+      {
+        EXPECT_LT(paperGrowth(l, pbc::AxisGains{ alpha, alpha, beta, beta }, &short_flag), 3.0)
+            << "L = " << l << ", alpha " << alpha << ", beta " << beta;
+        EXPECT_FALSE(short_flag) << "L = " << l;
+      }
+}
+
+TEST(BadInput, OrientationLostMidRunLevelsWithTheMeanAttitude)
+{
+  // F4: when orientation stopped mid-run, the level came from the one sample at that moment
+  // (its gravity direction, wave acceleration and instantaneous roll included). The hull here
+  // lists 5 degrees and rolls +-4 degrees with the 8 s waves; orientation stops at a roll
+  // extreme. The level must be the mean attitude, not the instantaneous one.
+  const double rate = 50.0, list = 5.0 * M_PI / 180.0, roll = 4.0 * M_PI / 180.0, w = 2.0 * M_PI / 8.0;
+  Compensator c;
+  CompensatorOutput out;
+  const int cut = static_cast<int>(122.0 * rate);  // 122 s = 15.25 periods: roll at its maximum
+  for (int k = 0; k < cut + 200; ++k)
+  {
+    const double t = 1000.0 + k / rate;
+    const pbc::Quaternion q(Eigen::AngleAxisd(list + roll * std::sin(w * t - w * 1000.0), Vector3::UnitX()));
+    pbc::ImuSample s;
+    s.t = t;
+    // Sway of 0.5 m with the waves, gravity, in the sensor frame.
+    const Vector3 level_force(0.0, -0.5 * w * w * std::sin(w * (t - 1000.0)), pbc::kStandardGravity);
+    s.specific_force = q.inverse() * level_force;
+    s.has_orientation = k < cut;
+    s.orientation = q;
+    ASSERT_EQ(c.addSample(s, &out), SampleStatus::kAccepted);
+    ASSERT_TRUE(finiteOutput(out));
+  }
+  const pbc::Quaternion mean(Eigen::AngleAxisd(list, Vector3::UnitX()));
+  EXPECT_EQ(c.levelSource(), pbc::LevelSource::kAttitudeBeforeLoss);
+  EXPECT_LT(c.levelOrientation().angularDistance(mean) * 180.0 / M_PI, 0.3);
+}

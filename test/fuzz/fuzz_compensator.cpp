@@ -62,13 +62,6 @@ pbc::CompensatorConfig makeConfig(pbc_fuzz::Input& in, bool wild)
   c.drift_time_constant = wild ? in.value(2.0, 2.0) : in.range(0.5, 10.0);
   c.max_gap = wild ? in.value(0.5, 0.5) : in.range(0.01, 2.0);
   c.max_rate_change = wild ? in.value(0.2, 0.2) : in.range(0.01, 0.9);
-  // Known finding F8: a calibration window shorter than a sample step gives an absurd bias.
-  // Kept at >= 0.1 s unless PBC_FUZZ_SHORT_CALIBRATION=1.
-  static const bool short_calibration = std::getenv("PBC_FUZZ_SHORT_CALIBRATION") != nullptr;
-  if (!short_calibration && c.calibration_duration >= 0.0 && c.calibration_duration < 0.1)
-  {
-    c.calibration_duration = 0.1;
-  }
   return c;
 }
 
@@ -128,55 +121,29 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   double dt = 0.01;
   std::uint64_t handed = 0;
   pbc::CompensatorOutput out;
-  // Known finding F1 (docs/reliability.md): a step of less than ~1 ms between two stamps makes
-  // the core re-plan for a huge rate (int overflow, gigabytes of tables). Until the core bounds
-  // the rate, such steps are skipped unless PBC_FUZZ_TINY_DT=1.
-  static const bool tiny_dt = std::getenv("PBC_FUZZ_TINY_DT") != nullptr;
-  bool has_last = false;
-  double last_t = 0.0;
-  // Known finding F3: a finite but absurd specific force (1e232 m/s^2) is accepted and overflows
-  // the state. The ROS wrapper and compensate_bag drop such samples (conversions.h plausible():
-  // 2000 m/s^2, 100 rad/s); here the same limits apply unless PBC_FUZZ_HUGE=1.
-  static const bool huge = std::getenv("PBC_FUZZ_HUGE") != nullptr;
-  // Known finding F5: paper mode with gains inside validate()'s ranges can diverge
-  // exponentially (e.g. alpha_p 1.5, beta_p 10.4 at L ~ 2 samples) until the output overflows.
-  // An input whose paper-mode output first grows past 1e6 m is stopped there, unless
-  // PBC_FUZZ_STRICT_PAPER=1; a NaN without that divergence is still a failure.
-  static const bool strict_paper = std::getenv("PBC_FUZZ_STRICT_PAPER") != nullptr;
-  bool diverged = false;
+  // Every sample reaches the core, whatever its stamp step (F1) or values (F3: finite but
+  // absurd ones must be refused by the core itself); every accepted sample's output must be
+  // finite, in paper mode too (F5) and after any setConstantBias (F8, F8b).
   auto feed = [&](const pbc::ImuSample& s) {
-    if (diverged)
-    {
-      return;
-    }
-    if (!tiny_dt && has_last && std::isfinite(s.t) && s.t > last_t && s.t - last_t < 1e-3)
-    {
-      return;
-    }
-    if (!huge)
-    {
-      for (int i = 0; i < 3; ++i)
-      {
-        if ((std::isfinite(s.specific_force[i]) && std::abs(s.specific_force[i]) > 2000.0) ||
-            (std::isfinite(s.angular_rate[i]) && std::abs(s.angular_rate[i]) > 100.0))
-        {
-          return;
-        }
-      }
-    }
+    const bool absurd = s.specific_force.cwiseAbs().maxCoeff() > pbc::kMaxSpecificForce ||
+                        s.angular_rate.cwiseAbs().maxCoeff() > pbc::kMaxAngularRate;
     ++handed;
     const pbc::SampleStatus status = c->addSample(s, &out);
-    if (status == pbc::SampleStatus::kAccepted || status == pbc::SampleStatus::kGapReset ||
-        status == pbc::SampleStatus::kResetBackwards)
+    if (verbose)
     {
-      has_last = true;
-      last_t = s.t;
-      if (!strict_paper && c->config().mode == pbc::Mode::kPaper && finiteOutput(out) &&
-          (out.position_filtered.norm() > 1e6 || out.position_wave.norm() > 1e6))
-      {
-        diverged = true;
-        return;
-      }
+      std::fprintf(stderr, "sample t %.6f f %.6g %.6g %.6g q %s: %s, bias %.6g %.6g %.6g\n", s.t, s.specific_force.x(),
+                   s.specific_force.y(), s.specific_force.z(), s.has_orientation ? "yes" : "no",
+                   pbc::toString(status).c_str(), out.axes[0].constant_bias, out.axes[1].constant_bias,
+                   out.axes[2].constant_bias);
+    }
+    const bool accepted = status == pbc::SampleStatus::kAccepted || status == pbc::SampleStatus::kGapReset ||
+                          status == pbc::SampleStatus::kResetBackwards;
+    if (accepted && absurd)
+    {
+      pbc_fuzz::fail("a sample beyond kMaxSpecificForce / kMaxAngularRate was accepted");
+    }
+    if (accepted)
+    {
       if (!finiteOutput(out))
       {
         std::ostringstream m;
@@ -291,7 +258,6 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         std::fprintf(stderr, "reset at t %.6f\n", t);
       }
       c->reset();
-      has_last = false;
     }
     else if (op == 12)
     {
@@ -305,9 +271,14 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     {
       const pbc::Vector3 bias(in.value(0.0, 0.1), in.value(0.0, 0.1), in.value(0.0, 0.1));
       const bool ok = c->setConstantBias(bias);
-      if (ok != bias.allFinite())
+      if (verbose)
       {
-        pbc_fuzz::fail("setConstantBias accepted a non-finite bias or refused a finite one");
+        std::fprintf(stderr, "setConstantBias %.6g %.6g %.6g: %s\n", bias.x(), bias.y(), bias.z(),
+                     ok ? "accepted" : "refused");
+      }
+      if (ok != (bias.allFinite() && bias.cwiseAbs().maxCoeff() <= pbc::kMaxConstantBias))
+      {
+        pbc_fuzz::fail("setConstantBias accepted a non-finite or absurd bias, or refused a plausible one");
       }
     }
     else
@@ -318,7 +289,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
 
   const pbc::CompensatorCounters& k = c->counters();
   // Resets and gap restarts are accepted samples too (counted in both).
-  const std::uint64_t counted = k.accepted + k.rejected_non_finite + k.rejected_bad_quaternion + k.rejected_duplicate;
+  const std::uint64_t counted = k.accepted + k.rejected_non_finite + k.rejected_bad_quaternion +
+                                k.rejected_duplicate + k.rejected_out_of_range;
   if (counted != handed)
   {
     pbc_fuzz::fail("counters do not add up: " + std::to_string(counted) + " counted, " + std::to_string(handed) +

@@ -93,11 +93,6 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const bool wire = (in.byte() % 4) == 0;
   double t = 1.7e9;
   int messages = 0;
-  // Known finding F1 (docs/reliability.md, see fuzz_compensator.cpp): steps under 1 ms skipped
-  // unless PBC_FUZZ_TINY_DT=1.
-  static const bool tiny_dt = std::getenv("PBC_FUZZ_TINY_DT") != nullptr;
-  bool has_last = false;
-  double last_t = 0.0;
   while (!in.empty() && ++messages < 300)
   {
     sensor_msgs::Imu msg;
@@ -130,10 +125,6 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       continue;
     }
     const pbc::ImuSample sample = pbc::toImuSample(msg, mounting);
-    if (!tiny_dt && has_last && sample.t > last_t && sample.t - last_t < 1e-3)
-    {
-      continue;
-    }
     if (!pbc::plausible(sample))
     {
       continue;  // as CompensatorRos::imuCallback: dropped and counted
@@ -145,8 +136,6 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     {
       continue;
     }
-    has_last = true;
-    last_t = sample.t;
     if (!out.position_filtered.allFinite() || !out.position_wave.allFinite() || !out.velocity_filtered.allFinite() ||
         !out.velocity_wave.allFinite() || !out.acceleration_level.allFinite() || !out.orientation.coeffs().allFinite())
     {

@@ -8,7 +8,6 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
-#include <cstdlib>
 #include <fstream>
 #include <stdexcept>
 #include <string>
@@ -68,13 +67,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   }
   catch (const std::exception& e)
   {
-    // Known finding F2 (docs/reliability.md): loadCalibration throws YAML exceptions instead of
-    // returning false for some malformed files; the node and compensate_bag catch them.
-    // PBC_FUZZ_STRICT_CALIBRATION=1 makes it a failure again (after the core fix).
-    if (std::getenv("PBC_FUZZ_STRICT_CALIBRATION") != nullptr)
-    {
-      pbc_fuzz::fail(std::string("loadCalibration threw: ") + e.what());
-    }
+    // F2 (docs/reliability.md, fixed): loadCalibration threw YAML exceptions for some malformed
+    // files instead of returning false with a message.
+    pbc_fuzz::fail(std::string("loadCalibration threw: ") + e.what());
   }
   std::remove(path.c_str());
   return 0;

@@ -1,7 +1,8 @@
 // Corpus replay: runs one fuzz harness (linked in) over every file of its committed corpus,
 // as a gtest in the ordinary build (g++, and ASan+UBSan with PBC_SANITIZE=ON). Keeps every input
 // that once found a bug, and the seeds, as a regression test without clang or libFuzzer.
-// PBC_FUZZ_CORPUS is the corpus directory of the harness.
+// PBC_FUZZ_CORPUS is the corpus directory of the harness. Files named on the command line are
+// replayed instead (e.g. `test_fuzz_corpus_compensator test/fuzz/findings/F5-...`).
 #include <algorithm>
 #include <cstdint>
 #include <filesystem>
@@ -14,13 +15,18 @@
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size);
 
+namespace
+{
+std::vector<std::filesystem::path> g_files;  ///< from the command line; empty: the corpus
+}
+
 TEST(FuzzCorpus, EveryInputRunsClean)
 {
   namespace fs = std::filesystem;
-  std::vector<fs::path> files;
+  std::vector<fs::path> files = g_files;
   for (const auto& entry : fs::directory_iterator(PBC_FUZZ_CORPUS))
   {
-    if (entry.is_regular_file())
+    if (g_files.empty() && entry.is_regular_file())
     {
       files.push_back(entry.path());
     }
@@ -43,5 +49,6 @@ TEST(FuzzCorpus, EveryInputRunsClean)
 int main(int argc, char** argv)
 {
   testing::InitGoogleTest(&argc, argv);
+  g_files.assign(argv + 1, argv + argc);
   return RUN_ALL_TESTS();
 }

@@ -7,6 +7,7 @@
 //   - the sample rate changes: WARN "IMU sample rate changed ..."
 //   - the input stops: ERROR "no IMU data ..."; resumes: ERROR cleared, WARN "gap ..." once
 //   - the IMU restarts with its clock going back: WARN "time went backwards ..."
+//   - paper mode on a period of fewer than 6 samples: WARN "... paper-mode periodic correction off ..."
 #include <cstdlib>
 
 #include <gtest/gtest.h>
@@ -104,7 +105,10 @@ TEST(Faults, EachFaultShowsInDiagnosticsAndOutputsContinue)
   stream.orientation = false;
   s = observer.waitForMessage("orientation missing", 10.0);
   EXPECT_EQ(s.level, DiagnosticStatus::WARN) << describe(s);
-  EXPECT_EQ(s.values["orientation"], "missing: levelled with gravity") << describe(s);
+  // Levelled with the mean orientation the IMU gave before (not one sample's gravity direction).
+  EXPECT_NE(s.message.find("mean IMU orientation before it stopped"), std::string::npos) << describe(s);
+  EXPECT_EQ(s.values["orientation"], "missing: levelled with the mean IMU orientation before it stopped")
+      << describe(s);
   EXPECT_TRUE(observer.waitForOdometry(50, 5.0)) << "outputs stopped without orientation";
   stream.orientation = true;
   s = observer.waitForStatus([](const Status& st) { return st.values.count("orientation") &&
@@ -136,6 +140,19 @@ TEST(Faults, EachFaultShowsInDiagnosticsAndOutputsContinue)
   s = observer.waitForMessage("time went backwards", 10.0);
   EXPECT_EQ(s.level, DiagnosticStatus::WARN) << describe(s);
   EXPECT_TRUE(observer.waitForOdometry(50, 5.0)) << "no output after the IMU clock went back";
+
+  // Paper mode on a period of fewer than 6 samples (1.9 Hz at 10 Hz: L = 5): the comb loop could
+  // diverge there, so its periodic correction is switched off on that axis, with a WARN.
+  Tuning paper = config;
+  paper.mode = "paper";
+  ASSERT_TRUE(client.setConfiguration(paper));
+  stream.rate = 10.0;
+  stream.frequency = 1.9;
+  stream.amplitude = 1.0;
+  s = observer.waitForMessage("paper-mode periodic correction off", 60.0);
+  EXPECT_EQ(s.level, DiagnosticStatus::WARN) << describe(s);
+  EXPECT_NE(s.message.find("samples on x is shorter than 6"), std::string::npos) << describe(s);
+  EXPECT_TRUE(observer.waitForOdometry(20, 5.0)) << "outputs stopped in paper mode at a short period";
 
   stream.stop();
   EXPECT_EQ(observer.nonfinite(), 0u) << "a non-finite position was published";

@@ -24,6 +24,20 @@ using Quaternion = Eigen::Quaterniond;
 /// Standard gravity [m/s^2] (REP-103: ENU, z up; a sensor at rest reads +g on its up axis).
 constexpr double kStandardGravity = 9.80665;
 
+/// Largest specific force accepted per axis [m/s^2] (about 200 g: above any accelerometer fitted
+/// on a ship). A finite value beyond it is a driver glitch, not a measurement: integrated, it
+/// would overflow the estimator state.
+constexpr double kMaxSpecificForce = 2000.0;
+/// Largest angular rate accepted per axis [rad/s].
+constexpr double kMaxAngularRate = 100.0;
+/// Largest constant bias accepted per axis [m/s^2] (setConstantBias, calibration files).
+constexpr double kMaxConstantBias = 50.0;
+/// Shortest period, in samples, that paper mode corrects (Eq. 6-7). Below it the comb loop can
+/// diverge with gains that validate() accepts (L = 2: |alpha/2 - beta/4| < 1 is needed, so beta
+/// = 10.4 diverges); from 6 samples on it stays bounded for every accepted gain (scanned,
+/// test_bad_input: PaperModeShortPeriod...).
+constexpr int kMinPaperPeriod = 6;
+
 /// How the periodic drift terms d_v, d_p are computed.
 enum class Mode
 {
@@ -96,7 +110,23 @@ struct AxisState
   bool locked = false;
   double d_v = 0.0;               ///< [m/s]
   double d_p = 0.0;               ///< [m]
+  /// Paper mode: locked, but the period is shorter than kMinPaperPeriod samples, so the
+  /// periodic correction is off on this axis (it could diverge).
+  bool period_too_short = false;
 };
+
+/// Where the level frame of samples without orientation comes from.
+enum class LevelSource
+{
+  kNone,                ///< no sample without orientation yet
+  kGravity,             ///< mean specific force (gravity direction) of the calibration window
+  kAttitudeBeforeLoss,  ///< mean IMU orientation over the last kAttitudeMemory s before it stopped
+};
+std::string toString(LevelSource source);
+
+/// Time constant of the mean IMU orientation kept for when orientation disappears [s]: long
+/// against a wave period, so the hull's roll and pitch average out.
+constexpr double kAttitudeMemory = 30.0;
 
 /// What happened to a sample handed to addSample().
 enum class SampleStatus
@@ -105,6 +135,7 @@ enum class SampleStatus
   kRejectedNonFinite,      ///< NaN/Inf in a used field: dropped
   kRejectedBadQuaternion,  ///< zero or non-unit orientation: dropped
   kRejectedDuplicate,      ///< same stamp as the previous sample: dropped
+  kRejectedOutOfRange,     ///< finite but beyond kMaxSpecificForce / kMaxAngularRate: dropped
   kResetBackwards,         ///< stamp went backwards (bag loop): state reset, sample starts anew
   kGapReset,               ///< gap longer than max_gap: integration reset, sample starts anew
 };
@@ -138,6 +169,7 @@ struct CompensatorCounters
   std::uint64_t rejected_non_finite = 0;
   std::uint64_t rejected_bad_quaternion = 0;
   std::uint64_t rejected_duplicate = 0;
+  std::uint64_t rejected_out_of_range = 0;
   std::uint64_t resets_backwards = 0;
   std::uint64_t gap_resets = 0;
   std::uint64_t rate_changes = 0;
@@ -170,12 +202,14 @@ public:
   /// Starts a new constant-bias calibration window at the next sample.
   void recalibrate();
   /// Sets the constant bias [m/s^2] (level frame) and marks the compensator calibrated.
-  /// Returns false (and changes nothing) for a non-finite value.
+  /// Returns false (and changes nothing) for a non-finite value or one beyond kMaxConstantBias.
   bool setConstantBias(const Vector3& bias);
   bool calibrated() const;
   Vector3 constantBias() const;
-  /// Orientation sensor -> level used when samples carry none (from the calibration window).
+  /// Orientation sensor -> level used when samples carry none (from the calibration window, or
+  /// the mean IMU orientation before it disappeared: see levelSource()).
   Quaternion levelOrientation() const;
+  LevelSource levelSource() const;
 
   const CompensatorCounters& counters() const;
 

@@ -31,14 +31,9 @@ struct Mounting
 /// base -> level. NaN/Inf are passed through on purpose: the core rejects and counts them.
 ImuSample toImuSample(const sensor_msgs::Imu& msg, const Mounting& mounting);
 
-/// Largest specific force accepted from a message [m/s^2] (about 200 g: above any accelerometer
-/// fitted on a ship; a driver glitch, not a measurement).
-constexpr double kMaxSpecificForce = 2000.0;
-/// Largest angular rate accepted from a message [rad/s].
-constexpr double kMaxAngularRate = 100.0;
-
 /// True when the finite specific force and angular rate of a sample are physically plausible
-/// (each component within kMaxSpecificForce / kMaxAngularRate). NaN/Inf are left to the core
+/// (each component within the core's kMaxSpecificForce / kMaxAngularRate, which the core
+/// enforces too; checked here to count and report them per message). NaN/Inf are left to the core
 /// (this returns true for them) so that they keep their own counter. A finite but absurd value
 /// (1e30 m/s^2) would otherwise be integrated and overflow the estimator state.
 bool plausible(const ImuSample& sample);
