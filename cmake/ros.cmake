@@ -90,8 +90,10 @@ if(CATKIN_ENABLE_TESTING)
   target_link_libraries(test_faults ${catkin_LIBRARIES})
   add_dependencies(test_faults ${PROJECT_NAME}_nodelet ${PROJECT_NAME}_generate_messages_cpp ${PROJECT_NAME}_gencfg)
 
-  # The nodelet manager killed and respawned while data flows.
+  # The nodelet manager killed and respawned while data flows (compensator.launch respawn:=true).
   add_rostest_gtest(test_manager_restart test/ros/manager_restart.test test/ros/manager_restart.cpp)
   target_link_libraries(test_manager_restart ${catkin_LIBRARIES})
   add_dependencies(test_manager_restart ${PROJECT_NAME}_nodelet ${PROJECT_NAME}_generate_messages_cpp)
+  # The same check on the stand-alone nodelet of compensator.launch (respawn:=true) killed.
+  add_rostest(test/ros/manager_restart_standalone.test DEPENDENCIES test_manager_restart)
 endif()

@@ -1,6 +1,8 @@
-// The nodelet manager dies (SIGKILL, as on a crash) while IMU data flows. roslaunch respawns it,
-// the loader node respawns and loads the compensator again. Checks: outputs stop, then resume
-// from a fresh estimator (calibrates again, diagnostics counters start over), never a NaN.
+// A process dies (SIGKILL, as on a crash) while IMU data flows: the nodelet manager
+// (manager_restart.test: roslaunch respawns it, the loader node respawns and loads the
+// compensator again) or the stand-alone compensator itself (manager_restart_standalone.test),
+// named by the private parameter ~kill. Checks: outputs stop, then resume from a fresh
+// estimator (calibrates again, diagnostics counters start over), never a NaN.
 #include <signal.h>
 #include <sys/types.h>
 
@@ -61,19 +63,20 @@ TEST(ManagerRestart, OutputsResumeFromAFreshEstimator)
   const pbc_test::Status before_kill = observer.last();
   const long received_before =
       before_kill.values.count("received") ? std::stol(before_kill.values.at("received")) : std::stol(s.values["received"]);
-  const int pid = nodePid("/manager");
-  ASSERT_GT(pid, 0) << "no PID for /manager";
+  const std::string victim = ros::NodeHandle("~").param<std::string>("kill", "/manager");
+  const int pid = nodePid(victim);
+  ASSERT_GT(pid, 0) << "no PID for " << victim;
   ASSERT_EQ(::kill(pid, SIGKILL), 0);
   // Outputs stop (the last queued messages may still arrive).
   ros::WallDuration(1.0).sleep();
   const std::size_t after_kill = observer.odometryCount();
   ros::WallDuration(1.0).sleep();
-  EXPECT_LE(observer.odometryCount(), after_kill + 5) << "outputs continued with the manager killed";
+  EXPECT_LE(observer.odometryCount(), after_kill + 5) << "outputs continued with " << victim << " killed";
 
   // Respawned: outputs again, from a fresh estimator.
-  ASSERT_TRUE(observer.waitForOdometry(200, 60.0)) << "no output after the manager restart";
-  EXPECT_GT(nodePid("/manager"), 0);
-  EXPECT_NE(nodePid("/manager"), pid) << "the manager was not restarted";
+  ASSERT_TRUE(observer.waitForOdometry(200, 60.0)) << "no output after " << victim << " restarted";
+  EXPECT_GT(nodePid(victim), 0);
+  EXPECT_NE(nodePid(victim), pid) << victim << " was not restarted";
   s = observer.waitForStatus(
       [&](const pbc_test::Status& st) {
         return st.values.count("received") && std::stol(st.values.at("received")) < received_before &&
