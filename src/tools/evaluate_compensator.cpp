@@ -49,7 +49,8 @@ void usage(std::ostream& out)
          "                            [--markdown OUT.md] [--csv OUT.csv]\n"
          "Simulates the scenario N times (seeds 1..N) and reports, per method and axis, the slow-motion\n"
          "error after the run, the total position error after the run, and the wave RMS error after S\n"
-         "seconds as a percentage of the true wave RMS. With --calibration-scenario the constant bias\n"
+         "seconds as a percentage of the true wave RMS and of the significant wave height Hs = 4 x the\n"
+         "standard deviation of the true wave motion of that axis. With --calibration-scenario the constant bias\n"
          "of the 'constant' and 'paper' methods comes from a run of that (static) scenario, as in the\n"
          "paper; the default mode always calibrates itself from the data, causally.\n"
          "--estimate adds a method NAME scored on the odometry another estimator wrote for the same\n"
@@ -135,6 +136,9 @@ struct Errors
   Vector3 slow_rms = Vector3::Constant(NAN);   ///< RMS(filtered - true slow) after settling [m]
   Vector3 total_rms = Vector3::Constant(NAN);  ///< RMS(filtered + wave - true position) after settling [m]
   Vector3 wave_rms_percent = Vector3::Constant(NAN);  ///< RMS(wave - true wave) / RMS(true wave) [%]
+  /// RMS(wave - true wave) / significant wave height [%], Hs = 4 std(true wave) per axis (for z the
+  /// usual significant wave height of heave; issue 5's metric).
+  Vector3 wave_hs_percent = Vector3::Constant(NAN);
 };
 
 /// The metrics of every method: a method's slow and wave motion, sample by sample, against the
@@ -151,6 +155,7 @@ public:
     const Vector3 e = wave - s.truth.wave_position;
     error2_ += e.cwiseProduct(e);
     truth2_ += s.truth.wave_position.cwiseProduct(s.truth.wave_position);
+    truth_sum_ += s.truth.wave_position;
     const Vector3 slow_error = slow - (s.truth.slow_position - slow0_);
     const Vector3 total_error = slow + wave - (s.truth.position - slow0_);
     slow2_ += slow_error.cwiseProduct(slow_error);
@@ -169,6 +174,13 @@ public:
         errors.wave_rms_percent[i] = 100.0 * std::sqrt(error2_[i] / truth2_[i]);
     if (n_ > 0)
     {
+      const Vector3 mean = truth_sum_ / n_;
+      for (int i = 0; i < 3; ++i)
+      {
+        const double truth_std = std::sqrt(std::max(0.0, truth2_[i] / n_ - mean[i] * mean[i]));
+        if (truth_std > 0.0)
+          errors.wave_hs_percent[i] = 100.0 * std::sqrt(error2_[i] / n_) / (4.0 * truth_std);
+      }
       errors.slow_rms = (slow2_ / n_).cwiseSqrt();
       errors.total_rms = (total2_ / n_).cwiseSqrt();
     }
@@ -179,6 +191,7 @@ private:
   Vector3 slow0_;
   double settle_;
   Vector3 error2_ = Vector3::Zero(), truth2_ = Vector3::Zero(), slow2_ = Vector3::Zero(), total2_ = Vector3::Zero();
+  Vector3 truth_sum_ = Vector3::Zero();
   int n_ = 0;
 };
 
@@ -412,18 +425,19 @@ int main(int argc, char** argv)
 
     std::ostringstream table;
     table << "| method | axis | slow-motion error at end [m] | slow-motion RMS error [m] | total position error at end [m] "
-             "| total position RMS error [m] | wave RMS error [%] |\n|---|---|---|---|---|---|---|\n";
+             "| total position RMS error [m] | wave RMS error [% of true wave RMS] | wave RMS error [% of Hs] "
+             "|\n|---|---|---|---|---|---|---|---|\n";
     std::ofstream csv;
     if (!options.csv.empty())
     {
       csv.open(options.csv);
-      csv << "method,axis,seed,slow_final_m,slow_rms_m,total_final_m,total_rms_m,wave_rms_percent\n";
+      csv << "method,axis,seed,slow_final_m,slow_rms_m,total_final_m,total_rms_m,wave_rms_percent,wave_hs_percent\n";
     }
     const char* axes = "xyz";
     for (const auto& method : methods)
       for (int i = 0; i < 3; ++i)
       {
-        std::vector<double> slow, slow_rms, total, total_rms, wave;
+        std::vector<double> slow, slow_rms, total, total_rms, wave, wave_hs;
         for (std::size_t k = 0; k < results[method].size(); ++k)
         {
           const Errors& e = results[method][k];
@@ -432,13 +446,16 @@ int main(int argc, char** argv)
           total.push_back(e.total_final[i]);
           total_rms.push_back(e.total_rms[i]);
           wave.push_back(e.wave_rms_percent[i]);
+          wave_hs.push_back(e.wave_hs_percent[i]);
           if (csv.is_open())
             csv << method << "," << axes[i] << "," << k + 1 << "," << e.slow_final[i] << "," << e.slow_rms[i] << ","
-                << e.total_final[i] << "," << e.total_rms[i] << "," << e.wave_rms_percent[i] << "\n";
+                << e.total_final[i] << "," << e.total_rms[i] << "," << e.wave_rms_percent[i] << ","
+                << e.wave_hs_percent[i] << "\n";
         }
         table << "| " << method << " | " << axes[i] << " | " << format(median(slow), "%.4f") << " | "
               << format(median(slow_rms), "%.4f") << " | " << format(median(total), "%.4f") << " | "
-              << format(median(total_rms), "%.4f") << " | " << format(median(wave), "%.1f") << " |\n";
+              << format(median(total_rms), "%.4f") << " | " << format(median(wave), "%.1f") << " | "
+              << format(median(wave_hs), "%.2f") << " |\n";
       }
     std::ostringstream heading;
     heading << "scenario " << scenario.name << ": " << scenario.rate << " Hz, " << scenario.duration
