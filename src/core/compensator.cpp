@@ -20,6 +20,8 @@ constexpr std::size_t kFrequencyHistory = 20;
 constexpr double kMaxFrequencySlope = 0.01;
 /// Largest relative change of the frequency extrapolated from the last FFT estimate [-].
 constexpr double kMaxExtrapolation = 0.15;
+/// Most Euler steps of the slow-motion observer per sample (stepDefault).
+constexpr int kMaxObserverSteps = 10000;
 /// Highest sample rate planned for [Hz]: a stamp step far below any IMU's period (a driver
 /// glitch) must not size FFT windows and tables for an absurd rate.
 constexpr double kMaxSampleRate = 10000.0;
@@ -921,12 +923,27 @@ private:
     const double w = 1.0 / config_.drift_time_constant;
     const double k1 = 3.0 * w, k2 = 3.0 * w * w, k3 = config_.enable_constant ? w * w * w : 0.0;
     const double bias = config_.enable_constant ? axis.bias : 0.0;
-    const double dv = (raw - wave_a - bias - k2 * axis.slow_p) * dt;
-    axis.slow_v += dv;
-    const double dp = (axis.slow_v - k1 * axis.slow_p) * dt;
-    axis.slow_p += dp;
-    if (calibrated_ && config_.enable_constant)
-      axis.bias += k3 * axis.slow_p * dt;
+    // This Euler step of the observer is stable only while dt < 0.55 drift_time_constant: a longer
+    // step (a slow IMU, a short gap) is split into steps of at most a quarter of it (F9: 0.59 s
+    // samples with a 0.5 s constant grew the bias x7 per sample). Past kMaxObserverSteps the slow
+    // motion starts again, as after a gap.
+    const double split = std::ceil(w * dt / 0.25);
+    if (split > kMaxObserverSteps)
+    {
+      axis.slow_p = axis.slow_v = 0.0;
+    }
+    else
+    {
+      const int steps = std::max(1, static_cast<int>(split));
+      const double h = dt / steps;
+      for (int k = 0; k < steps; ++k)
+      {
+        axis.slow_v += (raw - wave_a - (config_.enable_constant ? axis.bias : 0.0) - k2 * axis.slow_p) * h;
+        axis.slow_p += (axis.slow_v - k1 * axis.slow_p) * h;
+        if (calibrated_ && config_.enable_constant)
+          axis.bias += k3 * axis.slow_p * h;
+      }
+    }
     axis.d_v = -(bias + k2 * axis.slow_p) * dt;
     axis.d_p = -k1 * axis.slow_p * dt;
 

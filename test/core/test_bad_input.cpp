@@ -399,3 +399,27 @@ TEST(BadInput, OrientationLostMidRunLevelsWithTheMeanAttitude)
   EXPECT_EQ(c.levelSource(), pbc::LevelSource::kAttitudeBeforeLoss);
   EXPECT_LT(c.levelOrientation().angularDistance(mean) * 180.0 / M_PI, 0.3);
 }
+
+TEST(BadInput, SlowImuAgainstAShortDriftConstantStaysBounded)
+{
+  // F9 (fuzz_compensator, long run): samples 0.59 s apart with drift_time_constant 0.5 s made the
+  // slow-motion observer's Euler step unstable: the constant bias grew x7 per sample to 1e154.
+  CompensatorConfig config;
+  config.drift_time_constant = 0.5;
+  config.calibration_duration = 3.0;
+  config.max_gap = 2.0;
+  pbc::test::Shake shake;
+  shake.rate = 1.0 / 0.5883;
+  shake.frequency = Vector3(0.17, 0.17, 0.17);
+  shake.amplitude = Vector3(0.5, 0.3, 0.2);
+  shake.duration = 300.0;
+  const auto r = pbc::test::makeShake(shake);
+  Compensator c(config);
+  CompensatorOutput out;
+  for (const auto& s : r.samples)
+  {
+    ASSERT_EQ(c.addSample(s, &out), SampleStatus::kAccepted);
+    ASSERT_TRUE(finiteOutput(out)) << "t = " << s.t;
+    ASSERT_LT(c.constantBias().norm(), 1.0) << "t = " << s.t;
+  }
+}
