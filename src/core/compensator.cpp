@@ -108,38 +108,53 @@ private:
 };
 
 /// Recursive least squares with exponential forgetting on [1, cos(k phi), sin(k phi)], k=1..H.
-/// Sizes are bounded (no heap allocation per sample).
+/// Plain fixed-size arrays and loops over the H used (at most 9 parameters): Eigen's dynamic-size
+/// products cost several times more at this size. No heap allocation.
 class HarmonicEstimator
 {
   static constexpr int kMaxParameters = 1 + 2 * kMaxHarmonics;
-  using Vector = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kMaxParameters, 1>;
-  using Matrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxParameters, kMaxParameters>;
+  using Vector = std::array<double, kMaxParameters>;
 
 public:
   void reset(int harmonics)
   {
     harmonics_ = harmonics;
-    const int n = 1 + 2 * harmonics;
-    theta_ = Vector::Zero(n);
-    covariance_ = Matrix::Identity(n, n) * 1e4;
-    regressor_ = Vector::Zero(n);
-    gain_ = Vector::Zero(n);
+    n_ = 1 + 2 * harmonics;
+    theta_.fill(0.0);
+    for (auto& row : covariance_)
+      row.fill(0.0);
+    for (int i = 0; i < n_; ++i)
+      covariance_[i][i] = 1e4;
+    regressor_phase_ = NAN;
     updates_ = 0;
   }
   /// One update with forgetting factor lambda; returns the a-priori residual.
   double update(double phase, double value, double lambda)
   {
     fillRegressor(phase);
-    const double residual = value - theta_.dot(regressor_);
-    gain_.noalias() = covariance_ * regressor_;
-    const double denominator = lambda + regressor_.dot(gain_);
-    gain_ /= denominator;
-    theta_.noalias() += gain_ * residual;
-    // P = (P - K h' P) / lambda, with h' P = (P h)' = (K * denominator)' since P is symmetric;
-    // symmetrised so rounding cannot make it indefinite.
-    covariance_.noalias() -= (gain_ * denominator) * gain_.transpose();
-    covariance_ /= lambda;
-    covariance_ = 0.5 * (covariance_ + covariance_.transpose()).eval();
+    const Vector& h = regressor_;
+    double prediction = 0.0;
+    for (int i = 0; i < n_; ++i)
+      prediction += theta_[i] * h[i];
+    const double residual = value - prediction;
+    Vector g;  // P h
+    double denominator = lambda;
+    for (int i = 0; i < n_; ++i)
+    {
+      g[i] = 0.0;
+      for (int j = 0; j < n_; ++j)
+        g[i] += covariance_[i][j] * h[j];
+      denominator += h[i] * g[i];
+    }
+    const double inverse = 1.0 / denominator;
+    for (int i = 0; i < n_; ++i)
+      theta_[i] += g[i] * inverse * residual;
+    // P = (P - P h h' P / denominator) / lambda, computed on one triangle and mirrored so that
+    // rounding cannot make it asymmetric (or indefinite).
+    const double inverse_lambda = 1.0 / lambda;
+    for (int i = 0; i < n_; ++i)
+      for (int j = i; j < n_; ++j)
+        covariance_[i][j] = covariance_[j][i] = (covariance_[i][j] - g[i] * g[j] * inverse) * inverse_lambda;
     ++updates_;
     return residual;
   }
@@ -147,14 +162,15 @@ public:
   /// for the current phase; omega [rad/s] is the fundamental. variance_factor: h' P h of the
   /// displacement (multiply by the residual variance).
   void evaluate(double phase, double omega, double* acceleration, double* position, double* velocity,
-                double* variance_factor, double* velocity_variance_factor) const
+                double* variance_factor, double* velocity_variance_factor)
   {
+    fillRegressor(phase);
     double a = 0.0, x = 0.0, v = 0.0;
-    Vector dx = Vector::Zero(theta_.size());
-    Vector dv = Vector::Zero(theta_.size());
+    Vector dx, dv;
+    dx[0] = dv[0] = 0.0;
     for (int k = 1; k <= harmonics_; ++k)
     {
-      const double c = std::cos(k * phase), s = std::sin(k * phase);
+      const double c = regressor_[2 * k - 1], s = regressor_[2 * k];
       const double ck = theta_[2 * k - 1], sk = theta_[2 * k];
       const double w = k * omega;
       a += ck * c + sk * s;
@@ -168,12 +184,12 @@ public:
     *acceleration = a;
     *position = x;
     *velocity = v;
-    *variance_factor = dx.dot(covariance_ * dx);
-    *velocity_variance_factor = dv.dot(covariance_ * dv);
+    *variance_factor = quadraticForm(dx);
+    *velocity_variance_factor = quadraticForm(dv);
   }
   double constant() const
   {
-    return theta_.size() > 0 ? theta_[0] : 0.0;
+    return theta_[0];
   }
 
   long updates() const
@@ -182,19 +198,39 @@ public:
   }
 
 private:
+  /// [1, cos(k phi), sin(k phi)] with one sin/cos call (angle-sum recurrence), kept for a
+  /// second call at the same phase.
   void fillRegressor(double phase)
   {
+    if (phase == regressor_phase_)
+      return;
+    regressor_phase_ = phase;
+    const double c1 = std::cos(phase), s1 = std::sin(phase);
     regressor_[0] = 1.0;
+    double c = c1, s = s1;
     for (int k = 1; k <= harmonics_; ++k)
     {
-      regressor_[2 * k - 1] = std::cos(k * phase);
-      regressor_[2 * k] = std::sin(k * phase);
+      regressor_[2 * k - 1] = c;
+      regressor_[2 * k] = s;
+      const double next_c = c * c1 - s * s1;
+      s = s * c1 + c * s1;
+      c = next_c;
     }
+  }
+  double quadraticForm(const Vector& d) const
+  {
+    double sum = 0.0;
+    for (int i = 0; i < n_; ++i)
+      for (int j = 0; j < n_; ++j)
+        sum += d[i] * covariance_[i][j] * d[j];
+    return sum;
   }
 
   int harmonics_ = 1;
-  Vector theta_, regressor_, gain_;
-  Matrix covariance_;
+  int n_ = 3;
+  Vector theta_{}, regressor_{};
+  std::array<Vector, kMaxParameters> covariance_{};
+  double regressor_phase_ = NAN;
   long updates_ = 0;
 };
 

@@ -114,17 +114,26 @@ FrequencyEstimate FrequencyTracker::analyse(double f_min, double f_max, double m
   if (available < 16)
     return estimate;
 
-  // The newest `available` samples, mean removed, Hann-windowed, zero-padded to the FFT size.
+  // The newest `available` samples, oldest first: at most two contiguous pieces of the ring
+  // (no index arithmetic per sample).
+  const int first = (head_ - available + n_) % n_;
+  const int first_length = std::min(available, n_ - first);
+  const double* pieces[2] = { ring_.data() + first, ring_.data() };
+  const int lengths[2] = { first_length, available - first_length };
+
+  // Mean removed, Hann-windowed, zero-padded to the FFT size.
   double mean = 0.0;
-  for (int i = 0; i < available; ++i)
-    mean += ring_[(head_ - available + i + n_) % n_];
+  for (int p = 0; p < 2; ++p)
+    for (int i = 0; i < lengths[p]; ++i)
+      mean += pieces[p][i];
   mean /= available;
   double variance = 0.0;
-  for (int i = 0; i < available; ++i)
-  {
-    const double d = ring_[(head_ - available + i + n_) % n_] - mean;
-    variance += d * d;
-  }
+  for (int p = 0; p < 2; ++p)
+    for (int i = 0; i < lengths[p]; ++i)
+    {
+      const double d = pieces[p][i] - mean;
+      variance += d * d;
+    }
   // A (numerically) constant signal has no period, whatever its rounding noise looks like.
   if (variance / available <= 1e-18 * (1.0 + mean * mean))
     return estimate;
@@ -148,11 +157,14 @@ FrequencyEstimate FrequencyTracker::analyse(double f_min, double f_max, double m
     plan_->window_length = available;
   }
   const double window_sum = plan_->window_sum;
-  const int first = (head_ - available + n_) % n_;
-  for (int i = 0; i < available; ++i)
+  const double* window = plan_->window.data();
+  double* in = plan_->in;
+  for (int p = 0; p < 2; ++p)
   {
-    const int j = first + i < n_ ? first + i : first + i - n_;
-    plan_->in[i] = plan_->window[i] * (ring_[j] - mean);
+    for (int i = 0; i < lengths[p]; ++i)
+      in[i] = window[i] * (pieces[p][i] - mean);
+    in += lengths[p];
+    window += lengths[p];
   }
   std::fill(plan_->in + available, plan_->in + fft_size_, 0.0);
   fftw_execute(plan_->plan);
@@ -161,8 +173,6 @@ FrequencyEstimate FrequencyTracker::analyse(double f_min, double f_max, double m
   const double rate = elapsed > 0.0 ? (available - 1) / elapsed : rate_;
   const int bins = fft_size_ / 2 + 1;
   const double df = rate / fft_size_;
-  for (int k = 0; k < bins; ++k)
-    plan_->power[k] = plan_->out[k][0] * plan_->out[k][0] + plan_->out[k][1] * plan_->out[k][1];
 
   // Search band: never DC (bin 0) nor Nyquist, and a period must fit 3 times in the data.
   const double span = available / rate;
@@ -171,6 +181,9 @@ FrequencyEstimate FrequencyTracker::analyse(double f_min, double f_max, double m
   const int k_hi = std::min(bins - 2, static_cast<int>(std::floor(f_max / df)));
   if (k_hi - k_lo < 2)
     return estimate;
+  // Power only where it is read: the band and one bin either side (interpolation).
+  for (int k = k_lo - 1; k <= k_hi + 1; ++k)
+    plan_->power[k] = plan_->out[k][0] * plan_->out[k][0] + plan_->out[k][1] * plan_->out[k][1];
 
   int k_peak = k_lo;
   for (int k = k_lo; k <= k_hi; ++k)
