@@ -260,12 +260,21 @@ Report diagnose(const Recording& real_in, const sim::Scenario& scenario_in, cons
   judge(cands);
   std::sort(cands.begin(), cands.end(), [](const Candidate& a, const Candidate& b) { return a.shrink > b.shrink; });
 
-  // A pure spectral line is the same signal for periodic_bias and vibration: when both explain
-  // about as much, name it by its frequency (below 1 Hz: a periodic bias, above: a vibration).
-  if (cands.size() >= 2 && equivalent(cands[0].effect, cands[1].effect) && cands[0].effect != cands[1].effect &&
-      cands[0].shrink - cands[1].shrink < 0.1)
+  // A pure spectral line is the same signal for periodic_bias and vibration: when the twin
+  // explains at least half as much, name the line by its frequency (below 1 Hz a periodic bias,
+  // above a vibration: the vocabulary's slow bias and engine line).
+  if (!cands.empty() && (cands[0].effect == "periodic_bias" || cands[0].effect == "vibration"))
   {
-    double f = 0.0;
+    double f = -1.0;
+    std::size_t twin = 0;
+    for (std::size_t i = 1; i < cands.size(); ++i)
+    {
+      if (cands[i].effect != cands[0].effect && equivalent(cands[i].effect, cands[0].effect) &&
+          cands[i].shrink >= 0.5 * cands[0].shrink)
+      {
+        twin = i;
+      }
+    }
     for (const auto& c : cands)
     {
       if (c.effect == "vibration" && !c.specs.empty())
@@ -274,21 +283,25 @@ Report diagnose(const Recording& real_in, const sim::Scenario& scenario_in, cons
       }
     }
     const std::string want = f > 1.0 ? "vibration" : "periodic_bias";
-    if (cands[1].effect == want)
+    if (twin > 0 && f >= 0.0 && cands[twin].effect == want)
     {
-      std::swap(cands[0], cands[1]);
+      std::rotate(cands.begin(), cands.begin() + static_cast<std::ptrdiff_t>(twin), cands.begin() + static_cast<std::ptrdiff_t>(twin) + 1);
     }
   }
-  // A Gauss-Markov bias whose fitted correlation time exceeds half the recording is, over that
-  // recording, a random walk: name the simpler random walk when it explains about as much.
+  // A random walk and a Gauss-Markov bias both explain a wandering bias. Name the simpler random
+  // walk (no correlation time) when it explains about as much (within 0.06), or when the
+  // fitted correlation time exceeds half the recording (over that recording, a random walk) and
+  // it explains nearly as much (within 0.15). A Gauss-Markov bias whose correlation time shows
+  // in the recording leaves the random walk clearly behind (0.15-0.25 in validate_gap).
   if (cands.size() >= 2 && cands[0].effect == "bias_instability" && !cands[0].specs.empty())
   {
     const double tc = cands[0].specs.back().params.at("correlation_time")[0];
     for (std::size_t i = 1; i < cands.size(); ++i)
     {
-      if (cands[i].effect == "bias_random_walk" && tc > 0.5 * rep.duration && cands[0].shrink - cands[i].shrink < 0.15)
+      const double behind = cands[0].shrink - cands[i].shrink;
+      if (cands[i].effect == "bias_random_walk" && (behind < 0.06 || (tc > 0.5 * rep.duration && behind < 0.15)))
       {
-        std::swap(cands[0], cands[i]);
+        std::rotate(cands.begin(), cands.begin() + static_cast<std::ptrdiff_t>(i), cands.begin() + static_cast<std::ptrdiff_t>(i) + 1);
         break;
       }
     }
