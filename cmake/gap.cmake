@@ -4,7 +4,8 @@ add_library(${PROJECT_NAME}_gap
   src/gap/signal.cpp
   src/gap/features.cpp
   src/gap/fit.cpp
-  src/gap/diagnose.cpp)
+  src/gap/diagnose.cpp
+  src/gap/truth.cpp)
 target_include_directories(${PROJECT_NAME}_gap PUBLIC include)
 target_link_libraries(${PROJECT_NAME}_gap PUBLIC ${PROJECT_NAME}_sim Eigen3::Eigen PkgConfig::FFTW3)
 

@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """Plots of a diagnose_gap output folder: spectra and Allan curves (real vs sim vs sim+effect,
 withheld part), a gap heat map (axis x band, z of the withheld part before the verdict), drift
-curves (block means of the whole recording against the ensemble's range).
+curves (block means of the whole recording against the ensemble's range) and, with a truth,
+the residual real minus the ideal IMU of the truth against the simulated runs' own (truth.png).
 
     /usr/bin/python3 scripts/gap_plots.py --dir OUT [--title TEXT]
 """
@@ -40,6 +41,28 @@ def grid(title):
     fig, axes = plt.subplots(2, 3, figsize=(11, 6.2), sharex=True)
     fig.suptitle(title, fontsize=9)
     return fig, axes.ravel()
+
+
+def block_plot(d, name, title):
+    """Block means of NAME.csv: real against the ensemble's range (and the verdict's median)."""
+    dr = curves(read(os.path.join(d, name + ".csv")), "t")
+    fig, axes = grid(title)
+    for i, c in enumerate(CH):
+        ax = axes[i]
+        p = dr[c]
+        ax.fill_between(p["t"], p["sim_lo"], p["sim_hi"], color="tab:blue", alpha=0.25, label="sim range")
+        ax.plot(p["t"], p["sim_med"], color="tab:blue", lw=0.8)
+        if "sim_effect_med" in p:
+            ax.plot(p["t"], p["sim_effect_med"], color="tab:red", ls="--", lw=0.8, label="sim + verdict")
+        ax.plot(p["t"], p["real"], color="k", lw=0.9, label="real")
+        ax.set_title(c, fontsize=8)
+        ax.tick_params(labelsize=7)
+        if i >= 3:
+            ax.set_xlabel("t [s]", fontsize=7)
+    axes[0].legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(os.path.join(d, name + ".png"), dpi=72)
+    plt.close(fig)
 
 
 def main():
@@ -83,23 +106,9 @@ def main():
     fig.savefig(os.path.join(d, "allan.png"), dpi=72)
     plt.close(fig)
 
-    dr = curves(read(os.path.join(d, "drift.csv")), "t")
-    fig, axes = grid("Block means (drift), whole recording: " + a.title)
-    for i, c in enumerate(CH):
-        ax = axes[i]
-        p = dr[c]
-        ax.fill_between(p["t"], p["sim_lo"], p["sim_hi"], color="tab:blue", alpha=0.25, label="sim range")
-        ax.plot(p["t"], p["sim_med"], color="tab:blue", lw=0.8)
-        ax.plot(p["t"], p["sim_effect_med"], color="tab:red", ls="--", lw=0.8, label="sim + verdict")
-        ax.plot(p["t"], p["real"], color="k", lw=0.9, label="real")
-        ax.set_title(c, fontsize=8)
-        ax.tick_params(labelsize=7)
-        if i >= 3:
-            ax.set_xlabel("t [s]", fontsize=7)
-    axes[0].legend(fontsize=7)
-    fig.tight_layout()
-    fig.savefig(os.path.join(d, "drift.png"), dpi=72)
-    plt.close(fig)
+    block_plot(d, "drift", "Block means (drift), whole recording: " + a.title)
+    if os.path.exists(os.path.join(d, "truth.csv")):
+        block_plot(d, "truth", "Real minus the ideal IMU of its truth (block means) vs the simulated runs' own: " + a.title)
 
     feats = read(os.path.join(d, "features.csv"))
     bands = []

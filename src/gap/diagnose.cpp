@@ -75,6 +75,76 @@ std::string departureJson(const Departure& d)
   return o.str();
 }
 
+/// Means of `blocks` consecutive blocks of rows (the last block takes what is left).
+Eigen::MatrixXd blockMeans(const Eigen::MatrixXd& x, int blocks)
+{
+  Eigen::MatrixXd out(blocks, x.cols());
+  const Eigen::Index n = x.rows();
+  const Eigen::Index bl = std::max<Eigen::Index>(1, n / blocks);
+  for (int b = 0; b < blocks; ++b)
+  {
+    const Eigen::Index a = std::min(n - 1, b * bl);
+    const Eigen::Index len = std::max<Eigen::Index>(1, std::min(bl, n - a));
+    out.row(b) = x.middleRows(a, len).colwise().mean();
+  }
+  return out;
+}
+
+/// Block-mean curves of several runs against the real one: channel,t,real,sim_lo,sim_med,sim_hi[,extra].
+std::string blockCsv(const Eigen::MatrixXd& real, const std::vector<Eigen::MatrixXd>& runs, double duration,
+                     const std::vector<Eigen::MatrixXd>* extra = nullptr)
+{
+  std::ostringstream o;
+  const int blocks = static_cast<int>(real.rows());
+  for (int ch = 0; ch < kChannels; ++ch)
+  {
+    for (int b = 0; b < blocks; ++b)
+    {
+      std::vector<double> v, e;
+      for (const auto& r : runs)
+      {
+        v.push_back(r(b, ch));
+      }
+      for (std::size_t i = 0; extra != nullptr && i < extra->size(); ++i)
+      {
+        e.push_back((*extra)[i](b, ch));
+      }
+      std::sort(v.begin(), v.end());
+      std::sort(e.begin(), e.end());
+      o << channelNames()[ch] << "," << num((b + 0.5) * duration / blocks) << "," << num(real(b, ch)) << ","
+        << num(v.front()) << "," << num(v[v.size() / 2]) << "," << num(v.back());
+      if (extra != nullptr)
+      {
+        o << "," << num(e.empty() ? 0.0 : e[e.size() / 2]);
+      }
+      o << "\n";
+    }
+  }
+  return o.str();
+}
+
+/// Curves of one run for the plots: PSD and Allan deviation of the withheld part, block means of
+/// the whole run (drift).
+struct Curves
+{
+  std::vector<Psd> psd;
+  std::vector<std::vector<double>> adev;
+  Eigen::MatrixXd blocks;
+};
+
+Curves curvesOf(const Recording& whole, double fit_fraction, double rate, int nseg, const std::vector<int>& ms)
+{
+  Curves c;
+  const Recording held = sliceFraction(whole, fit_fraction, 1.0);
+  for (int ch = 0; ch < kChannels; ++ch)
+  {
+    c.psd.push_back(welch(held.data.col(ch), rate, nseg));
+    c.adev.push_back(allanDeviation(held.data.col(ch), ms));
+  }
+  c.blocks = blockMeans(whole.data, 64);
+  return c;
+}
+
 /// Members of an ensemble: features of the withheld part of each run.
 struct Ensemble
 {
@@ -118,12 +188,41 @@ Report diagnose(const Recording& real_in, const sim::Scenario& scenario_in, cons
   const int M = std::max(3, opt.ensemble);
   auto seedOf = [&opt](int i) { return opt.seed_base + static_cast<std::uint64_t>(i); };
 
-  // Base ensemble, whole recordings.
-  std::vector<Recording> base(M);
-  parallelFor(M, opt.threads, [&](int i) { base[i] = simulateRecording(scenario, seedOf(i)); });
-  for (auto& b : base)
+  // Base ensemble, whole recordings. With a truth in the recording, each run's residual against
+  // its own truth (then dropped: it is large) is reduced to the truth features at once.
+  const bool truth = real.truth.size() >= 3;
+  const int truth_blocks = 64;
+  std::vector<std::vector<double>> truth_members(truth ? M : 0);
+  std::vector<Eigen::MatrixXd> truth_runs(truth ? M : 0);
+  // Plot curves of the base runs (withheld part) are taken on the way.
+  const std::size_t n_held = sliceFraction(real, opt.fit_fraction, 1.0).size();
+  const int nseg = welchSegment(n_held);
+  std::vector<int> ms;
+  for (int m = 1; static_cast<std::size_t>(m) * 10 <= n_held; m *= 2)
   {
-    b.rate = real.rate;
+    ms.push_back(m);
+  }
+  std::vector<Curves> cb(M);
+  std::vector<Recording> base(M);
+  parallelFor(M, opt.threads, [&](int i) {
+    base[i] = simulateRecording(scenario, seedOf(i), truth);
+    base[i].rate = real.rate;
+    cb[i] = curvesOf(base[i], opt.fit_fraction, real.rate, nseg, ms);
+    if (truth)
+    {
+      const Eigen::MatrixXd res = truthResidual(base[i], scenario.gravity, opt.truth_smooth);
+      truth_members[i] = truthFeatures(res, opt.truth_segments);
+      truth_runs[i] = blockMeans(res, truth_blocks);
+      base[i].truth = TruthTrack();
+    }
+  });
+  if (truth)
+  {
+    rep.has_truth = true;
+    const Eigen::MatrixXd res = truthResidual(real, scenario.gravity, opt.truth_smooth);
+    const FeatureLayout tl = truthLayout(rep.duration, opt.truth_segments);
+    rep.truth_where = rankDepartures(truthFeatures(res, opt.truth_segments), ensembleStats(truth_members, tl), tl);
+    rep.truth_csv = "channel,t,real,sim_lo,sim_med,sim_hi\n" + blockCsv(blockMeans(res, truth_blocks), truth_runs, rep.duration);
   }
   const bool orient = real.has_orientation;
   const bool temp = real.has_temperature && scenario.temperature.enabled;
@@ -135,6 +234,9 @@ Report diagnose(const Recording& real_in, const sim::Scenario& scenario_in, cons
   parallelFor(M, opt.threads, [&](int i) { all[i] = computeFeatures(base[i], rep.layout_all); });
   rep.ens_all = ensembleStats(all, rep.layout_all);
   rep.where = rankDepartures(rep.real_all, rep.ens_all, rep.layout_all);
+  rep.where.insert(rep.where.end(), rep.truth_where.begin(), rep.truth_where.end());
+  std::stable_sort(rep.where.begin(), rep.where.end(),
+                   [](const Departure& a, const Departure& b) { return std::abs(a.z) > std::abs(b.z); });
   rep.gap_all = gapOf(zScores(rep.real_all, rep.ens_all));
   for (int i = 0; i < M; ++i)
   {
@@ -404,66 +506,20 @@ Report diagnose(const Recording& real_in, const sim::Scenario& scenario_in, cons
       specs = rep.ranking[rep.best].specs;
     }
     const sim::Scenario eff = withCandidate(scenario, specs);
-    const int nseg = welchSegment(real_held.size());
-    std::vector<int> ms;
-    for (int m = 1; static_cast<std::size_t>(m) * 10 <= real_held.size(); m *= 2)
-    {
-      ms.push_back(m);
-    }
-    const int blocks = 64;
-    struct Curves
-    {
-      std::vector<Psd> psd;
-      std::vector<std::vector<double>> adev;
-      Eigen::MatrixXd blocks;
-    };
-    auto curves = [&](const Recording& whole) {
-      Curves c;
-      const Recording held = sliceFraction(whole, opt.fit_fraction, 1.0);
-      for (int ch = 0; ch < kChannels; ++ch)
-      {
-        c.psd.push_back(welch(held.data.col(ch), real.rate, nseg));
-        c.adev.push_back(allanDeviation(held.data.col(ch), ms));
-      }
-      c.blocks.resize(blocks, kChannels);
-      const std::size_t bl = std::max<std::size_t>(1, whole.size() / blocks);
-      for (int b = 0; b < blocks; ++b)
-      {
-        const std::size_t a = std::min(whole.size() - 1, b * bl);
-        const std::size_t len = std::max<std::size_t>(1, std::min(bl, whole.size() - a));
-        c.blocks.row(b) = whole.data.middleRows(a, len).colwise().mean();
-      }
-      return c;
-    };
-    const Curves cr = curves(real);
-    std::vector<Curves> cb(M), ce(M);
-    parallelFor(2 * M, opt.threads, [&](int idx) {
-      const int i = idx % M;
-      if (idx < M)
-      {
-        Recording r = simulateRecording(scenario, seedOf(i));
-        r.rate = real.rate;
-        cb[i] = curves(r);
-      }
-      else
-      {
-        Recording r = simulateRecording(eff, seedOf(i));
-        r.rate = real.rate;
-        ce[i] = curves(r);
-      }
+    const Curves cr = curvesOf(real, opt.fit_fraction, real.rate, nseg, ms);
+    std::vector<Curves> ce(M);
+    parallelFor(M, opt.threads, [&](int i) {
+      Recording r = simulateRecording(eff, seedOf(i));
+      r.rate = real.rate;
+      ce[i] = curvesOf(r, opt.fit_fraction, real.rate, nseg, ms);
     });
     auto med = [](std::vector<double> v) {
       std::sort(v.begin(), v.end());
       return v.empty() ? 0.0 : v[v.size() / 2];
     };
-    auto pct = [](std::vector<double> v, double p) {
-      std::sort(v.begin(), v.end());
-      return v.empty() ? 0.0 : v[static_cast<std::size_t>(p * (v.size() - 1) + 0.5)];
-    };
-    std::ostringstream ps, as, ds;
+    std::ostringstream ps, as;
     ps << "channel,f,real,sim,sim_effect\n";
     as << "channel,tau,real,sim,sim_effect\n";
-    ds << "channel,t,real,sim_lo,sim_med,sim_hi,sim_effect_med\n";
     for (int ch = 0; ch < kChannels; ++ch)
     {
       const std::string& name = channelNames()[ch];
@@ -489,21 +545,16 @@ Report diagnose(const Recording& real_in, const sim::Scenario& scenario_in, cons
         as << name << "," << num(ms[k] / real.rate) << "," << num(cr.adev[ch][k]) << "," << num(med(vb)) << ","
            << num(med(ve)) << "\n";
       }
-      for (int b = 0; b < blocks; ++b)
-      {
-        std::vector<double> vb, ve;
-        for (int i = 0; i < M; ++i)
-        {
-          vb.push_back(cb[i].blocks(b, ch));
-          ve.push_back(ce[i].blocks(b, ch));
-        }
-        ds << name << "," << num((b + 0.5) * rep.duration / blocks) << "," << num(cr.blocks(b, ch)) << ","
-           << num(pct(vb, 0.0)) << "," << num(med(vb)) << "," << num(pct(vb, 1.0)) << "," << num(med(ve)) << "\n";
-      }
     }
     rep.psd_csv = ps.str();
     rep.allan_csv = as.str();
-    rep.drift_csv = ds.str();
+    std::vector<Eigen::MatrixXd> bb, be;
+    for (int i = 0; i < M; ++i)
+    {
+      bb.push_back(cb[i].blocks);
+      be.push_back(ce[i].blocks);
+    }
+    rep.drift_csv = "channel,t,real,sim_lo,sim_med,sim_hi,sim_effect_med\n" + blockCsv(cr.blocks, bb, rep.duration, &be);
     std::ostringstream fs;
     fs << "index,channel,quantity,range,segment,lo,hi,real,sim,spread,z_before,z_after\n";
     for (std::size_t i = 0; i < rep.layout_held.info.size(); ++i)
@@ -565,6 +616,12 @@ std::string reportJson(const Report& r)
       << ", \"z_after\": " << (i < r.where_held_after.size() ? num(r.where_held_after[i]) : "null") << "}";
   }
   o << "\n  ],\n";
+  o << "  \"truth\": {\"compared\": " << (r.has_truth ? "true" : "false") << ", \"departures\": [";
+  for (std::size_t i = 0; i < r.truth_where.size(); ++i)
+  {
+    o << (i ? ",\n    " : "\n    ") << departureJson(r.truth_where[i]);
+  }
+  o << "]},\n";
   o << "  \"seconds\": " << num(r.seconds) << "\n}\n";
   return o.str();
 }
@@ -586,6 +643,19 @@ std::string reportSummary(const Report& r)
                   d.where.quantity.c_str(), d.where.range.c_str(), d.where.segment.c_str(), d.where.stage.c_str(), d.z,
                   d.real, d.sim_median);
     o << buf;
+  }
+  if (r.has_truth)
+  {
+    std::snprintf(buf, sizeof(buf), "TRUTH (real minus the ideal IMU of its truth, against the ensemble's own): %zu departures%s\n",
+                  r.truth_where.size(), r.truth_where.empty() ? "" : "; largest:");
+    o << buf;
+    for (std::size_t i = 0; i < std::min<std::size_t>(4, r.truth_where.size()); ++i)
+    {
+      const Departure& d = r.truth_where[i];
+      std::snprintf(buf, sizeof(buf), "  %-4s %-10s %-16s z %+9.3g (real %.4g, sim %.4g)\n", d.where.channel.c_str(),
+                    d.where.quantity.c_str(), d.where.range.c_str(), d.z, d.real, d.sim_median);
+      o << buf;
+    }
   }
   o << "DIRECT:";
   for (const auto& d : r.direct)

@@ -7,7 +7,12 @@
 //                [--accel-scale K] [--gyro-scale K] [--time-scale K] [--rate HZ] [--skip-lines N]
 //                --sim SCENARIO.yaml --out DIR
 //   common: [--ensemble N] [--fit-fraction F] [--threads N] [--no-plots] [--max-duration S]
+//           [--truth-smooth S] [--no-truth]
 //
+// Truth: in a bag, nav_msgs/Odometry on --truth-topic (used when present; an explicit
+// --truth-topic without messages is an error); in a CSV, columns px,py,pz (world, z up, times
+// --truth-position-scale) and qw,qx,qy,qz (body -> world). The report then compares real minus
+// the ideal IMU driven by that truth with the same residual of every simulated run.
 // COL is a column name of the CSV header or a 0-based index, optionally prefixed with '-' to
 // negate it; without a t column the time is k / rate. Scales convert to SI (e.g. --accel-scale
 // 9.80665 for g, --gyro-scale 0.0174532925 for deg/s). Writes DIR/report.json, DIR/report.md,
@@ -29,6 +34,7 @@
 
 #include <rosbag/bag.h>
 #include <rosbag/view.h>
+#include <nav_msgs/Odometry.h>
 #include <sensor_msgs/Imu.h>
 #include <sensor_msgs/Temperature.h>
 
@@ -45,7 +51,8 @@ const char* const kUsage =
     "usage: diagnose_gap (--real REAL.bag | --real-csv FILE --columns t=C,ax=C,...,gz=C) --sim SCENARIO.yaml --out DIR\n"
     "         [--imu-topic imu/data] [--truth-topic ground_truth/odometry] [--temperature-topic imu/temperature]\n"
     "         [--accel-scale K] [--gyro-scale K] [--time-scale K] [--rate HZ] [--skip-lines N]\n"
-    "         [--ensemble N] [--fit-fraction F] [--threads N] [--max-duration S] [--steps N] [--no-plots]\n";
+    "         [--ensemble N] [--fit-fraction F] [--threads N] [--max-duration S] [--steps N] [--no-plots]\n"
+    "         [--truth-smooth S] [--no-truth] [--truth-position-scale K] (CSV truth columns px,py,pz,qw,qx,qy,qz)\n";
 
 struct UsageError : std::runtime_error
 {
@@ -57,6 +64,9 @@ struct Options
   std::string real, real_csv, columns, scenario, out;
   std::string imu_topic = "imu/data";
   std::string truth_topic = "ground_truth/odometry";
+  bool truth_topic_given = false;
+  bool use_truth = true;
+  double truth_position_scale = 1.0;
   std::string temperature_topic = "imu/temperature";
   double accel_scale = 1.0, gyro_scale = 1.0, time_scale = 1.0, rate = 0.0, max_duration = 0.0;
   int skip_lines = 0;
@@ -98,6 +108,22 @@ gap::Recording readBag(const Options& o)
       orientation_ok = orientation_ok && msg->orientation_covariance[0] >= 0 && std::abs(norm - 1.0) < 1e-3;
       r.orientation.emplace_back(q.w, q.x, q.y, q.z);
     }
+    else if (o.use_truth && topic == absoluteTopic(o.truth_topic))
+    {
+      const auto msg = m.instantiate<nav_msgs::Odometry>();
+      if (!msg)
+      {
+        throw std::runtime_error("topic " + o.truth_topic + " is not nav_msgs/Odometry");
+      }
+      const auto& p = msg->pose.pose;
+      const auto& tw = msg->twist.twist;
+      r.truth.stamp.push_back(msg->header.stamp.toSec());
+      r.truth.position.emplace_back(p.position.x, p.position.y, p.position.z);
+      r.truth.orientation.emplace_back(Eigen::Quaterniond(p.orientation.w, p.orientation.x, p.orientation.y, p.orientation.z).normalized());
+      r.truth.velocity.emplace_back(tw.linear.x, tw.linear.y, tw.linear.z);
+      r.truth.angular_velocity.emplace_back(tw.angular.x, tw.angular.y, tw.angular.z);
+      r.truth.has_twist = true;
+    }
     else if (topic == temp)
     {
       const auto msg = m.instantiate<sensor_msgs::Temperature>();
@@ -110,6 +136,10 @@ gap::Recording readBag(const Options& o)
   if (rows.empty())
   {
     throw std::runtime_error("no messages on " + o.imu_topic + " in " + o.real);
+  }
+  if (o.use_truth && o.truth_topic_given && r.truth.size() < 3)
+  {
+    throw std::runtime_error("no nav_msgs/Odometry on " + o.truth_topic + " in " + o.real);
   }
   r.data.resize(rows.size(), gap::kChannels);
   for (std::size_t i = 0; i < rows.size(); ++i)
@@ -241,6 +271,17 @@ gap::Recording readCsv(const Options& o)
   std::vector<std::array<double, 6>> rows;
   std::vector<double> temps;
   const bool has_temp = col.count("temp") > 0;
+  const char* truth_keys[7] = { "px", "py", "pz", "qw", "qx", "qy", "qz" };
+  int truth_cols = 0;
+  for (const char* key : truth_keys)
+  {
+    truth_cols += col.count(key) > 0 ? 1 : 0;
+  }
+  if (truth_cols != 0 && truth_cols != 7)
+  {
+    throw UsageError("--columns: truth needs all of px,py,pz,qw,qx,qy,qz");
+  }
+  const bool has_truth = truth_cols == 7 && o.use_truth;
   std::size_t k = 0;
   while (std::getline(in, line))
   {
@@ -267,6 +308,23 @@ gap::Recording readCsv(const Options& o)
       if (!finite)
       {
         continue;
+      }
+      if (has_truth)
+      {
+        double q[7];
+        for (int j = 0; j < 7; ++j)
+        {
+          const auto& [idx, sign] = col[truth_keys[j]];
+          q[j] = sign * std::stod(f.at(idx)) * (j < 3 ? o.truth_position_scale : 1.0);
+        }
+        const Eigen::Quaterniond qn = Eigen::Quaterniond(q[3], q[4], q[5], q[6]);
+        if (!(qn.norm() > 0.5))
+        {
+          continue;
+        }
+        r.truth.stamp.push_back(t);
+        r.truth.position.emplace_back(q[0], q[1], q[2]);
+        r.truth.orientation.push_back(qn.normalized());
       }
       rows.push_back(v);
       r.stamp.push_back(t);
@@ -307,6 +365,10 @@ void normalise(gap::Recording* r, double max_duration)
 {
   const double t0 = r->stamp.front();
   for (double& t : r->stamp)
+  {
+    t = t - t0 + 1000.0;
+  }
+  for (double& t : r->truth.stamp)
   {
     t = t - t0 + 1000.0;
   }
@@ -365,6 +427,23 @@ std::string reportMarkdown(const gap::Report& rep, const Options& o, bool plots)
   {
     md << "\n![gap heat map](heatmap.png)\n\n![drift](drift.png)\n";
   }
+  if (rep.has_truth)
+  {
+    md << "\n### Against the truth (sample by sample)\n\nReal minus the ideal IMU driven by the recording's truth "
+          "(both smoothed over " << o.diag.truth_smooth << " s), per axis and time segment, against the same residual of "
+          "every simulated run (its own truth). Departures (|z| > 3): " << rep.truth_where.size() << "\n\n"
+       << "| axis | quantity | time | segment | real | sim (median) | z |\n|---|---|---|---|---|---|---|\n";
+    for (const auto& d : rep.truth_where)
+    {
+      std::snprintf(buf, sizeof(buf), "| %s | %s | %s | %s | %.5g | %.5g | %+.3g |\n", d.where.channel.c_str(),
+                    d.where.quantity.c_str(), d.where.range.c_str(), d.where.segment.c_str(), d.real, d.sim_median, d.z);
+      md << buf;
+    }
+    if (plots)
+    {
+      md << "\n![truth residual](truth.png)\n";
+    }
+  }
   md << "\n## 2. Which effect (fit on the first part, judged on the withheld part)\n\n";
   std::snprintf(buf, sizeof(buf), "Gap of the scenario as given on the withheld part: %.3g (typical member vs the rest: %.3g).\n\n",
                 rep.gap_before, rep.null_gap_typical);
@@ -421,7 +500,14 @@ int main(int argc, char** argv)
       else if (a == "--sim") o.scenario = value();
       else if (a == "--out") o.out = value();
       else if (a == "--imu-topic") o.imu_topic = value();
-      else if (a == "--truth-topic") o.truth_topic = value();
+      else if (a == "--truth-topic")
+      {
+        o.truth_topic = value();
+        o.truth_topic_given = true;
+      }
+      else if (a == "--no-truth") o.use_truth = false;
+      else if (a == "--truth-smooth") o.diag.truth_smooth = std::stod(value());
+      else if (a == "--truth-position-scale") o.truth_position_scale = std::stod(value());
       else if (a == "--temperature-topic") o.temperature_topic = value();
       else if (a == "--accel-scale") o.accel_scale = std::stod(value());
       else if (a == "--gyro-scale") o.gyro_scale = std::stod(value());
@@ -513,6 +599,10 @@ int main(int argc, char** argv)
     std::ofstream(o.out + "/allan.csv") << rep.allan_csv;
     std::ofstream(o.out + "/drift.csv") << rep.drift_csv;
     std::ofstream(o.out + "/features.csv") << rep.features_csv;
+    if (rep.has_truth)
+    {
+      std::ofstream(o.out + "/truth.csv") << rep.truth_csv;
+    }
     bool plots = false;
     if (o.plots)
     {

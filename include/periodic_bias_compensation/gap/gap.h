@@ -23,6 +23,20 @@ constexpr int kChannels = 6;  ///< ax, ay, az [m/s^2], gx, gy, gz [rad/s]
 /// "ax", "ay", "az", "gx", "gy", "gz".
 const std::array<std::string, kChannels>& channelNames();
 
+/// Ground truth of a recording (a nav_msgs/Odometry topic, or truth columns of a CSV), on its
+/// own time base. World frame z up (ENU for a ship, the robot's base frame for an arm).
+struct TruthTrack
+{
+  std::vector<double> stamp;                      ///< [s], the IMU's clock
+  std::vector<Eigen::Vector3d> position;          ///< world [m]
+  std::vector<Eigen::Quaterniond> orientation;    ///< body -> world
+  bool has_twist = false;                         ///< velocities given (else differentiated)
+  std::vector<Eigen::Vector3d> velocity;          ///< body frame [m/s] (odometry twist)
+  std::vector<Eigen::Vector3d> angular_velocity;  ///< body frame [rad/s]
+
+  std::size_t size() const { return stamp.size(); }
+};
+
 /// An IMU recording in SI units (REP-145, sensor frame). Samples in stamp order as recorded.
 struct Recording
 {
@@ -34,6 +48,7 @@ struct Recording
   bool has_temperature = false;
   std::vector<double> temperature;   ///< [degC]
   std::string source;                ///< file name or "sim seed N"
+  TruthTrack truth;                  ///< empty when the recording has no truth
 
   std::size_t size() const { return stamp.size(); }
 };
@@ -44,8 +59,9 @@ double estimateRate(const Recording& recording);
 /// Samples with stamp - stamp[0] in [from, to) * span (fractions of the recording's span).
 Recording sliceFraction(const Recording& recording, double from, double to);
 
-/// Runs the simulator and keeps what a real sensor would give (dropped samples removed).
-Recording simulateRecording(const sim::Scenario& scenario, std::uint64_t seed);
+/// Runs the simulator and keeps what a real sensor would give (dropped samples removed), and with
+/// keep_truth its truth (as ground_truth/odometry carries it) at every kept sample.
+Recording simulateRecording(const sim::Scenario& scenario, std::uint64_t seed, bool keep_truth = false);
 
 /// A scenario made to match a recording: same rate, duration and start time.
 sim::Scenario matchScenario(const sim::Scenario& scenario, const Recording& real);
@@ -97,6 +113,30 @@ struct StampStats
   double backwards = 0.0;        ///< stamps earlier than their predecessor [-]
 };
 StampStats stampStats(const std::vector<double>& stamp, double rate);
+
+// ---------------------------------------------------------------------------------------------
+// Truth: sample-by-sample comparison
+
+/// The ideal IMU a truth track drives, at the given stamps (N x 6, REP-145): specific force
+/// R^T (a + g z) and angular rate in the body frame (sim::idealImu). The world acceleration is the
+/// central difference of the world velocity (the twist rotated into the world, or position
+/// differences), the angular rate the twist's (or from orientation differences); both are
+/// smoothed by a centred moving average of `smooth` s, then interpolated to the stamps.
+Eigen::MatrixXd idealFromTruth(const TruthTrack& truth, const std::vector<double>& stamps, double gravity, double smooth);
+
+/// Centred moving average of `smooth` s over the columns (stamps give the rate).
+Eigen::MatrixXd movingAverage(const Eigen::MatrixXd& x, double rate, double smooth);
+
+/// Real minus the ideal IMU driven by its truth, both smoothed alike (N x 6).
+Eigen::MatrixXd truthResidual(const Recording& r, double gravity, double smooth);
+
+/// Per channel and time segment: mean and standard deviation of a truth residual (layout: for
+/// each channel, `segments` means then `segments` standard deviations).
+std::vector<double> truthFeatures(const Eigen::MatrixXd& residual, int segments);
+
+struct FeatureLayout;
+/// Layout of truthFeatures() (stage "truth", range = the segment's time span since the start).
+FeatureLayout truthLayout(double duration, int segments);
 
 // ---------------------------------------------------------------------------------------------
 // Features
@@ -185,6 +225,8 @@ struct DiagnoseOptions
   double min_shrink = 0.3;       ///< below: "no candidate explains the gap"
   double pair_gain = 0.15;       ///< a pair is reported if it shrinks this much more
   std::uint64_t seed_base = 1000003;  ///< ensemble seeds seed_base + i (never the real's)
+  double truth_smooth = 0.2;     ///< moving average of the truth comparison [s]
+  int truth_segments = 8;        ///< time segments of the truth comparison
   bool verbose = false;
 };
 
@@ -249,6 +291,11 @@ struct Report
   std::string drift_csv;  ///< channel,t,real,sim_lo,sim_med,sim_hi,sim_effect_med (block means, whole recording)
   std::string features_csv;  ///< index,channel,quantity,range,segment,real,sim,spread,z_before,z_after
   std::vector<std::vector<double>> ens_held_members;  ///< for plots
+  // Truth (when the recording has one): real minus the ideal IMU of its truth, against the same
+  // residual of every ensemble member (its own truth); departures also go into `where`.
+  bool has_truth = false;
+  std::vector<Departure> truth_where;          ///< stage "truth", quantity truth_mean / truth_std
+  std::string truth_csv;  ///< channel,t,real,sim_lo,sim_med,sim_hi (block means of the residual)
 };
 
 /// Full diagnosis of a real recording against a scenario.
