@@ -4,12 +4,14 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <random>
+#include <set>
 #include <sstream>
 #include <string>
 
@@ -200,6 +202,122 @@ TEST(GapTool, DiagnosesASimulatedBagAndACsv)
   // wrong command lines
   EXPECT_EQ(shell(std::string(PBC_DIAGNOSE_GAP) + " --sim " + scen).status, 2);
   EXPECT_EQ(shell(std::string(PBC_DIAGNOSE_GAP) + " --real " + dir + "/missing.bag --sim " + scen + " --out " + dir + "/x").status, 1);
+  std::error_code ec;
+  fs::remove_all(dir, ec);
+}
+
+TEST(GapTruth, IdealImuFromTheTruthMatchesTheSimulatorsOwn)
+{
+  // no sensor effects: the recording IS the ideal IMU, so real minus the ideal IMU rebuilt from
+  // its truth (position, attitude and twist as ground_truth/odometry carries them) is tiny
+  sim::Scenario s = sinusoidBase();
+  s.effects.clear();
+  const gap::Recording r = gap::simulateRecording(s, 7, true);
+  ASSERT_EQ(r.truth.size(), r.size());
+  const Eigen::MatrixXd res = gap::truthResidual(r, s.gravity, 0.2);
+  const Eigen::Index n = res.rows(), edge = 50;  // smoothing and differences at the ends
+  const Eigen::MatrixXd mid = res.middleRows(edge, n - 2 * edge);
+  EXPECT_LT(mid.leftCols(3).cwiseAbs().maxCoeff(), 2e-3);   // of motion up to ~1 m/s^2
+  EXPECT_LT(mid.rightCols(3).cwiseAbs().maxCoeff(), 1e-4);  // of rates up to ~0.1 rad/s
+  // without the twist (positions and attitudes only, as the robot-arm CSV gives them)
+  gap::Recording p = r;
+  p.truth.has_twist = false;
+  const Eigen::MatrixXd res2 = gap::truthResidual(p, s.gravity, 0.2).middleRows(edge, n - 2 * edge);
+  EXPECT_LT(res2.leftCols(3).cwiseAbs().maxCoeff(), 5e-3);
+  EXPECT_LT(res2.rightCols(3).cwiseAbs().maxCoeff(), 2e-4);
+}
+
+TEST(GapTruth, LocatesABiasStepInTimeAndAxis)
+{
+  // "real": the base plus a bias step of 0.05 m/s^2 on ay in the last quarter only
+  const sim::Scenario base = sinusoidBase();
+  gap::Recording real = gap::simulateRecording(base, 5151, true);
+  const double t0 = real.stamp.front(), span = real.stamp.back() - t0;
+  for (std::size_t i = 0; i < real.size(); ++i)
+  {
+    if (real.stamp[i] - t0 >= 0.75 * span)
+    {
+      real.data(i, 1) += 0.05;
+    }
+  }
+  const gap::Report rep = gap::diagnose(real, base, gap::DiagnoseOptions());
+  ASSERT_TRUE(rep.has_truth);
+  ASSERT_FALSE(rep.truth_where.empty()) << gap::reportSummary(rep);
+  std::set<std::string> segments;
+  for (const auto& d : rep.truth_where)
+  {
+    // |z| just above 3 happens by chance among 96 features (the null's own largest |z| is ~5)
+    if (std::abs(d.z) > 6.0)
+    {
+      EXPECT_EQ(d.where.channel, "ay") << d.where.quantity << " " << d.where.segment << " z " << d.z;
+    }
+    if (d.where.quantity == "truth_mean" && d.where.channel == "ay")
+    {
+      segments.insert(d.where.segment);
+      EXPECT_NEAR(d.real - d.sim_median, 0.05, 0.01);
+    }
+  }
+  EXPECT_EQ(segments, (std::set<std::string>{ "seg 7/8", "seg 8/8" })) << gap::reportSummary(rep);
+  // the truth departures are in `where` too, and in report.json
+  EXPECT_TRUE(std::any_of(rep.where.begin(), rep.where.end(), [](const gap::Departure& d) { return d.where.stage == "truth"; }));
+  EXPECT_NE(gap::reportJson(rep).find("\"truth\": {\"compared\": true"), std::string::npos);
+}
+
+TEST(GapTruth, BagWithATruthTopic)
+{
+  // a simulator bag (ground_truth/odometry inside) whose sensor has a 2 % z scale factor the
+  // scenario lacks: the truth comparison finds az off by 2 % of g in every segment
+  const std::string dir = tempDir();
+  const std::string scen = std::string(PBC_SOURCE_DIR) + "/config/scenarios/moored_sea_state_4.yaml";
+  std::ofstream(dir + "/real.yaml") << readAll(scen) << "  - name: scale_factor\n    accel: [0.0, 0.0, 0.02]\n";
+  CommandResult r = shell(std::string(PBC_SIMULATE_IMU) + " --scenario " + dir + "/real.yaml --out " + dir +
+                          "/real.bag --seed 77 --duration 120");
+  ASSERT_EQ(r.status, 0) << r.output;
+  r = shell(std::string(PBC_DIAGNOSE_GAP) + " --real " + dir + "/real.bag --sim " + scen + " --out " + dir +
+            "/out --no-plots --steps 1 --truth-topic ground_truth/odometry");
+  ASSERT_EQ(r.status, 0) << r.output;
+  const std::string json = readAll(dir + "/out/report.json");
+  EXPECT_NE(json.find("\"truth\": {\"compared\": true"), std::string::npos) << json;
+  EXPECT_NE(json.find("{\"axis\": \"az\", \"quantity\": \"truth_mean\""), std::string::npos) << r.output;
+  EXPECT_TRUE(fs::exists(dir + "/out/truth.csv"));
+  // an explicit truth topic that the bag lacks is an error
+  EXPECT_EQ(shell(std::string(PBC_DIAGNOSE_GAP) + " --real " + dir + "/real.bag --sim " + scen + " --out " + dir +
+                  "/x --no-plots --truth-topic no/such/topic").status, 1);
+  std::error_code ec;
+  fs::remove_all(dir, ec);
+}
+
+TEST(GapRealData, RobotArmAgainstItsTruth)
+{
+  const fs::path data = fs::path(PBC_SOURCE_DIR) / ".." / "shared" / "data" / "robot_arm_ground_truth" /
+                        "eV50p_Sequencia2_MPU9150.csv";
+  if (!fs::exists(data))
+  {
+    GTEST_SKIP() << "real data absent (" << data.string() << "): skipped";
+  }
+  const std::string dir = tempDir();
+  const CommandResult r = shell(std::string(PBC_DIAGNOSE_GAP) + " --real-csv " + data.string() +
+                                " --columns t=t_s,ax=acc_x_g,ay=acc_y_g,az=acc_z_g,gx=gyro_x_dps,gy=gyro_y_dps,gz=gyro_z_dps,"
+                                "px=abb_pos_x_mm,py=abb_pos_y_mm,pz=abb_pos_z_mm,qw=abb_qw,qx=-abb_qx,qy=-abb_qy,qz=-abb_qz"
+                                " --truth-position-scale 0.001 --accel-scale 9.80665 --gyro-scale 0.017453292519943295 --sim " +
+                                std::string(PBC_SOURCE_DIR) + "/config/scenarios/gap_robot_arm_mpu9150.yaml --out " + dir +
+                                " --no-plots --steps 1 --ensemble 4 --truth-smooth 0.5");
+  ASSERT_EQ(r.status, 0) << r.output;
+  const std::string json = readAll(dir + "/report.json");
+  EXPECT_NE(json.find("\"truth\": {\"compared\": true"), std::string::npos) << json;
+  // the robot's quaternion, conjugated, is the sensor's attitude: the gyro then follows the
+  // truth's rate, so no gyro mean is off by more than 0.05 rad/s (its rates reach 0.7 rad/s)
+  std::size_t pos = 0;
+  while ((pos = json.find("\"quantity\": \"truth_mean\"", pos)) != std::string::npos)
+  {
+    const std::size_t axis = json.rfind("\"axis\": \"", pos);
+    const std::size_t real = json.find("\"real\": ", pos);
+    if (json.compare(axis + 9, 1, "g") == 0)
+    {
+      EXPECT_LT(std::abs(std::stod(json.substr(real + 8))), 0.05) << json.substr(axis, 200);
+    }
+    ++pos;
+  }
   std::error_code ec;
   fs::remove_all(dir, ec);
 }
