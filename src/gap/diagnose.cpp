@@ -203,11 +203,13 @@ Report diagnose(const Recording& real_in, const sim::Scenario& scenario_in, cons
     ms.push_back(m);
   }
   std::vector<Curves> cb(M);
+  std::vector<std::vector<double>> stage_members(M);
   std::vector<Recording> base(M);
   parallelFor(M, opt.threads, [&](int i) {
     base[i] = simulateRecording(scenario, seedOf(i), truth);
     base[i].rate = real.rate;
     cb[i] = curvesOf(base[i], opt.fit_fraction, real.rate, nseg, ms);
+    stage_members[i] = stageFeatures(base[i], 4);
     if (truth)
     {
       const Eigen::MatrixXd res = truthResidual(base[i], scenario.gravity, opt.truth_smooth);
@@ -216,6 +218,11 @@ Report diagnose(const Recording& real_in, const sim::Scenario& scenario_in, cons
       base[i].truth = TruthTrack();
     }
   });
+  {
+    // The compensator's pipeline stages on the real recording against the same on every run.
+    const FeatureLayout sl = stageLayout(rep.duration, 4);
+    rep.stage_where = rankDepartures(stageFeatures(real, 4), ensembleStats(stage_members, sl), sl);
+  }
   if (truth)
   {
     rep.has_truth = true;
@@ -235,6 +242,7 @@ Report diagnose(const Recording& real_in, const sim::Scenario& scenario_in, cons
   rep.ens_all = ensembleStats(all, rep.layout_all);
   rep.where = rankDepartures(rep.real_all, rep.ens_all, rep.layout_all);
   rep.where.insert(rep.where.end(), rep.truth_where.begin(), rep.truth_where.end());
+  rep.where.insert(rep.where.end(), rep.stage_where.begin(), rep.stage_where.end());
   std::stable_sort(rep.where.begin(), rep.where.end(),
                    [](const Departure& a, const Departure& b) { return std::abs(a.z) > std::abs(b.z); });
   rep.gap_all = gapOf(zScores(rep.real_all, rep.ens_all));
@@ -642,6 +650,16 @@ std::string reportSummary(const Report& r)
     std::snprintf(buf, sizeof(buf), "  %-10s %-13s %-20s %-8s %-11s z %+9.3g (real %.4g, sim %.4g)\n", d.where.channel.c_str(),
                   d.where.quantity.c_str(), d.where.range.c_str(), d.where.segment.c_str(), d.where.stage.c_str(), d.z,
                   d.real, d.sim_median);
+    o << buf;
+  }
+  std::snprintf(buf, sizeof(buf), "COMPENSATOR (its pipeline stages on real vs on the ensemble): %zu departures\n",
+                r.stage_where.size());
+  o << buf;
+  for (std::size_t i = 0; i < std::min<std::size_t>(3, r.stage_where.size()); ++i)
+  {
+    const Departure& d = r.stage_where[i];
+    std::snprintf(buf, sizeof(buf), "  %-8s %-15s %-16s z %+9.3g (real %.4g, sim %.4g)\n", d.where.channel.c_str(),
+                  d.where.quantity.c_str(), d.where.range.c_str(), d.z, d.real, d.sim_median);
     o << buf;
   }
   if (r.has_truth)

@@ -280,6 +280,8 @@ TEST(GapTruth, BagWithATruthTopic)
   EXPECT_NE(json.find("\"truth\": {\"compared\": true"), std::string::npos) << json;
   EXPECT_NE(json.find("{\"axis\": \"az\", \"quantity\": \"truth_mean\""), std::string::npos) << r.output;
   EXPECT_TRUE(fs::exists(dir + "/out/truth.csv"));
+  // the compensator's own constant-bias estimate on the vertical departs too (stage compensator)
+  EXPECT_NE(json.find("{\"axis\": \"level z\", \"quantity\": \"comp_bias\""), std::string::npos) << r.output;
   // an explicit truth topic that the bag lacks is an error
   EXPECT_EQ(shell(std::string(PBC_DIAGNOSE_GAP) + " --real " + dir + "/real.bag --sim " + scen + " --out " + dir +
                   "/x --no-plots --truth-topic no/such/topic").status, 1);

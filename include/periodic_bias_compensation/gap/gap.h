@@ -138,6 +138,14 @@ struct FeatureLayout;
 /// Layout of truthFeatures() (stage "truth", range = the segment's time span since the start).
 FeatureLayout truthLayout(double duration, int segments);
 
+/// The compensator's own pipeline stages (core Compensator, default mode) on a recording, per
+/// level axis and time segment: constant-bias estimate, dominant frequency while locked, rms of
+/// the filtered velocity, of the filtered position (error growth) and of the wave position.
+std::vector<double> stageFeatures(const Recording& r, int segments);
+
+/// Layout of stageFeatures() (stage "compensator", channel "level x/y/z").
+FeatureLayout stageLayout(double duration, int segments);
+
 // ---------------------------------------------------------------------------------------------
 // Features
 
@@ -295,6 +303,7 @@ struct Report
   // residual of every ensemble member (its own truth); departures also go into `where`.
   bool has_truth = false;
   std::vector<Departure> truth_where;          ///< stage "truth", quantity truth_mean / truth_std
+  std::vector<Departure> stage_where;          ///< stage "compensator" (its pipeline on real vs ensemble)
   std::string truth_csv;  ///< channel,t,real,sim_lo,sim_med,sim_hi (block means of the residual)
 };
 
