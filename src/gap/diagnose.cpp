@@ -652,28 +652,21 @@ std::string reportSummary(const Report& r)
                   d.real, d.sim_median);
     o << buf;
   }
-  std::snprintf(buf, sizeof(buf), "COMPENSATOR (its pipeline stages on real vs on the ensemble): %zu departures\n",
-                r.stage_where.size());
-  o << buf;
-  for (std::size_t i = 0; i < std::min<std::size_t>(3, r.stage_where.size()); ++i)
-  {
-    const Departure& d = r.stage_where[i];
-    std::snprintf(buf, sizeof(buf), "  %-8s %-15s %-16s z %+9.3g (real %.4g, sim %.4g)\n", d.where.channel.c_str(),
-                  d.where.quantity.c_str(), d.where.range.c_str(), d.z, d.real, d.sim_median);
+  auto timed = [&o, &buf](const char* title, const std::vector<Departure>& list) {
+    std::snprintf(buf, sizeof(buf), "%s: %zu departures\n", title, list.size());
     o << buf;
-  }
-  if (r.has_truth)
-  {
-    std::snprintf(buf, sizeof(buf), "TRUTH (real minus the ideal IMU of its truth, against the ensemble's own): %zu departures%s\n",
-                  r.truth_where.size(), r.truth_where.empty() ? "" : "; largest:");
-    o << buf;
-    for (std::size_t i = 0; i < std::min<std::size_t>(4, r.truth_where.size()); ++i)
+    for (std::size_t i = 0; i < std::min<std::size_t>(3, list.size()); ++i)
     {
-      const Departure& d = r.truth_where[i];
-      std::snprintf(buf, sizeof(buf), "  %-4s %-10s %-16s z %+9.3g (real %.4g, sim %.4g)\n", d.where.channel.c_str(),
+      const Departure& d = list[i];
+      std::snprintf(buf, sizeof(buf), "  %-8s %-15s %-16s z %+9.3g (real %.4g, sim %.4g)\n", d.where.channel.c_str(),
                     d.where.quantity.c_str(), d.where.range.c_str(), d.z, d.real, d.sim_median);
       o << buf;
     }
+  };
+  timed("COMPENSATOR (its pipeline stages on real vs on the ensemble)", r.stage_where);
+  if (r.has_truth)
+  {
+    timed("TRUTH (real minus the ideal IMU of its truth, against the ensemble's own)", r.truth_where);
   }
   o << "DIRECT:";
   for (const auto& d : r.direct)

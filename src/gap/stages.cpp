@@ -40,16 +40,7 @@ FeatureLayout stageLayout(double duration, int segments)
     {
       for (int s = 0; s < segments; ++s)
       {
-        FeatureInfo f;
-        f.channel = std::string("level ") + kLevelAxes[a];
-        f.quantity = q.name;
-        f.lo = duration * s / segments;
-        f.hi = duration * (s + 1) / segments;
-        char buf[64];
-        std::snprintf(buf, sizeof(buf), "%.4g-%.4g s", f.lo, f.hi);
-        f.range = buf;
-        f.segment = "seg " + std::to_string(s + 1) + "/" + std::to_string(segments);
-        f.stage = "compensator";
+        FeatureInfo f = segmentInfo(std::string("level ") + kLevelAxes[a], q.name, "compensator", duration, s, segments);
         f.floor = q.floor;
         f.rel_floor = q.rel_floor;
         L.info.push_back(f);

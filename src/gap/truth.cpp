@@ -143,6 +143,22 @@ std::vector<double> truthFeatures(const Eigen::MatrixXd& residual, int segments)
   return f;
 }
 
+FeatureInfo segmentInfo(const std::string& channel, const std::string& quantity, const std::string& stage,
+                        double duration, int s, int segments)
+{
+  FeatureInfo f;
+  f.channel = channel;
+  f.quantity = quantity;
+  f.lo = duration * s / segments;
+  f.hi = duration * (s + 1) / segments;
+  char buf[64];
+  std::snprintf(buf, sizeof(buf), "%.4g-%.4g s", f.lo, f.hi);
+  f.range = buf;
+  f.segment = "seg " + std::to_string(s + 1) + "/" + std::to_string(segments);
+  f.stage = stage;
+  return f;
+}
+
 FeatureLayout truthLayout(double duration, int segments)
 {
   FeatureLayout L;
@@ -154,16 +170,7 @@ FeatureLayout truthLayout(double duration, int segments)
     {
       for (int s = 0; s < segments; ++s)
       {
-        FeatureInfo f;
-        f.channel = channelNames()[c];
-        f.quantity = q;
-        f.lo = duration * s / segments;
-        f.hi = duration * (s + 1) / segments;
-        char buf[64];
-        std::snprintf(buf, sizeof(buf), "%.4g-%.4g s", f.lo, f.hi);
-        f.range = buf;
-        f.segment = "seg " + std::to_string(s + 1) + "/" + std::to_string(segments);
-        f.stage = "truth";
+        FeatureInfo f = segmentInfo(channelNames()[c], q, "truth", duration, s, segments);
         f.floor = q == "truth_mean" ? (acc ? 1e-5 : 1e-7) : (acc ? 1e-6 : 1e-8);
         f.rel_floor = q == "truth_mean" ? 0.0 : 0.03;
         L.info.push_back(f);

@@ -163,6 +163,10 @@ struct FeatureInfo
   double rel_floor = 0.0;  ///< plus this fraction of |ensemble median|
 };
 
+/// A feature of time segment s of `segments` over `duration` s (range = its time span).
+FeatureInfo segmentInfo(const std::string& channel, const std::string& quantity, const std::string& stage,
+                        double duration, int s, int segments);
+
 /// Fixed feature layout (bands, taus, segments) so that real and simulated runs compare.
 struct FeatureLayout
 {
