@@ -60,7 +60,7 @@ std::vector<double> stageFeatures(const Recording& r, int segments)
   std::vector<double> count(segments, 0.0);
   CompensatorOutput out;
   const double t0 = n > 0 ? r.stamp.front() : 0.0;
-  const double span = n > 1 ? r.stamp.back() - t0 : 1.0;
+  const double span = n > 1 ? std::max(1e-9, r.stamp.back() - t0) : 1.0;
   for (auto* v : { &bias, &v2, &p2, &w2 })
   {
     for (auto& a : *v)
