@@ -209,7 +209,6 @@ Report diagnose(const Recording& real_in, const sim::Scenario& scenario_in, cons
     base[i] = simulateRecording(scenario, seedOf(i), truth);
     base[i].rate = real.rate;
     cb[i] = curvesOf(base[i], opt.fit_fraction, real.rate, nseg, ms);
-    stage_members[i] = stageFeatures(base[i], 4);
     if (truth)
     {
       const Eigen::MatrixXd res = truthResidual(base[i], scenario.gravity, opt.truth_smooth);
@@ -220,6 +219,11 @@ Report diagnose(const Recording& real_in, const sim::Scenario& scenario_in, cons
   });
   {
     // The compensator's pipeline stages on the real recording against the same on every run.
+    // One run at a time: the core plans FFTW transforms, and FFTW planning is not thread-safe.
+    for (int i = 0; i < M; ++i)
+    {
+      stage_members[i] = stageFeatures(base[i], 4);
+    }
     const FeatureLayout sl = stageLayout(rep.duration, 4);
     rep.stage_where = rankDepartures(stageFeatures(real, 4), ensembleStats(stage_members, sl), sl);
   }
