@@ -17,3 +17,8 @@ target_link_libraries(nodelet_benchmark ${PROJECT_NAME}_sim_ros ${catkin_LIBRARI
 add_dependencies(nodelet_benchmark ${PROJECT_NAME}_nodelet compensator_node)
 add_executable(bag_read_floor EXCLUDE_FROM_ALL test/bench/bag_read_floor.cpp)
 target_link_libraries(bag_read_floor ${catkin_LIBRARIES})
+
+if(CATKIN_ENABLE_TESTING)
+  # The tools' shared command-line parser (header only, no ROS).
+  catkin_add_gtest(test_command_line test/core/main.cpp test/tools/test_command_line.cpp)
+endif()

@@ -16,6 +16,7 @@
 #include <fstream>
 #include <iostream>
 #include <map>
+#include <optional>
 #include <set>
 #include <stdexcept>
 #include <string>
@@ -31,6 +32,7 @@
 #include "periodic_bias_compensation/core/compensator.h"
 #include "periodic_bias_compensation/ros/conversions.h"
 #include "periodic_bias_compensation/ros/parameters.h"
+#include "periodic_bias_compensation/tools/command_line.h"
 
 namespace fs = std::filesystem;
 using namespace periodic_bias_compensation;
@@ -53,38 +55,18 @@ struct Options
   std::string imu_topic = "imu/data";
 };
 
-/// Thrown for a wrong command line (exit status 2).
-struct UsageError : std::runtime_error
-{
-  using std::runtime_error::runtime_error;
-};
-
-Options parseArguments(int argc, char** argv)
+/// The options, or nothing after --help. A wrong command line throws UsageError (exit status 2).
+std::optional<Options> parseArguments(int argc, char** argv)
 {
   Options options;
-  const std::map<std::string, std::string*> flags = {
-    { "--in", &options.in }, { "--out", &options.out }, { "--mode", &options.mode },
-    { "--params", &options.params }, { "--imu-topic", &options.imu_topic },
-  };
-  for (int i = 1; i < argc; ++i)
-  {
-    const std::string arg = argv[i];
-    if (arg == "-h" || arg == "--help")
-    {
-      std::cout << kUsage;
-      std::exit(0);
-    }
-    const auto it = flags.find(arg);
-    if (it == flags.end())
-    {
-      throw UsageError("unknown argument '" + arg + "'");
-    }
-    if (i + 1 >= argc)
-    {
-      throw UsageError("missing value after " + arg);
-    }
-    *it->second = argv[++i];
-  }
+  CommandLine cli(kUsage);
+  cli.text("--in", &options.in)
+      .text("--out", &options.out)
+      .text("--mode", &options.mode)
+      .text("--params", &options.params)
+      .text("--imu-topic", &options.imu_topic);
+  if (!cli.parse(argc, argv))
+    return std::nullopt;
   if (options.in.empty() || options.out.empty())
   {
     throw UsageError("--in and --out are required");
@@ -514,7 +496,10 @@ int compensateBagMain(int argc, char** argv)
   std::string temp_path;
   try
   {
-    options = parseArguments(argc, argv);
+    const std::optional<Options> parsed = parseArguments(argc, argv);
+    if (!parsed)
+      return 0;
+    options = *parsed;
     checkPaths(options);
     const Parameters params = loadParameters(options);
     BagCompensator compensator(options, params);

@@ -40,6 +40,7 @@
 
 #include "periodic_bias_compensation/gap/gap.h"
 #include "periodic_bias_compensation/sim/scenario.h"
+#include "periodic_bias_compensation/tools/command_line.h"
 
 namespace fs = std::filesystem;
 namespace gap = periodic_bias_compensation::gap;
@@ -54,10 +55,7 @@ const char* const kUsage =
     "         [--ensemble N] [--fit-fraction F] [--threads N] [--max-duration S] [--steps N] [--no-plots]\n"
     "         [--truth-smooth S] [--no-truth] [--truth-position-scale K] (CSV truth columns px,py,pz,qw,qx,qy,qz)\n";
 
-struct UsageError : std::runtime_error
-{
-  using std::runtime_error::runtime_error;
-};
+using periodic_bias_compensation::UsageError;
 
 struct Options
 {
@@ -479,49 +477,35 @@ int main(int argc, char** argv)
   Options o;
   try
   {
-    for (int i = 1; i < argc; ++i)
-    {
-      const std::string a = argv[i];
-      auto value = [&]() -> std::string {
-        if (i + 1 >= argc)
-        {
-          throw UsageError("missing value after " + a);
-        }
-        return argv[++i];
-      };
-      if (a == "-h" || a == "--help")
-      {
-        std::cout << kUsage;
-        return 0;
-      }
-      else if (a == "--real") o.real = value();
-      else if (a == "--real-csv") o.real_csv = value();
-      else if (a == "--columns") o.columns = value();
-      else if (a == "--sim") o.scenario = value();
-      else if (a == "--out") o.out = value();
-      else if (a == "--imu-topic") o.imu_topic = value();
-      else if (a == "--truth-topic")
-      {
-        o.truth_topic = value();
-        o.truth_topic_given = true;
-      }
-      else if (a == "--no-truth") o.use_truth = false;
-      else if (a == "--truth-smooth") o.diag.truth_smooth = std::stod(value());
-      else if (a == "--truth-position-scale") o.truth_position_scale = std::stod(value());
-      else if (a == "--temperature-topic") o.temperature_topic = value();
-      else if (a == "--accel-scale") o.accel_scale = std::stod(value());
-      else if (a == "--gyro-scale") o.gyro_scale = std::stod(value());
-      else if (a == "--time-scale") o.time_scale = std::stod(value());
-      else if (a == "--rate") o.rate = std::stod(value());
-      else if (a == "--skip-lines") o.skip_lines = std::stoi(value());
-      else if (a == "--ensemble") o.diag.ensemble = std::stoi(value());
-      else if (a == "--fit-fraction") o.diag.fit_fraction = std::stod(value());
-      else if (a == "--threads") o.diag.threads = std::stoi(value());
-      else if (a == "--max-duration") o.max_duration = std::stod(value());
-      else if (a == "--no-plots") o.plots = false;
-      else if (a == "--steps") o.steps = std::stoi(value());
-      else throw UsageError("unknown argument '" + a + "'");
-    }
+    periodic_bias_compensation::CommandLine cli(kUsage);
+    cli.text("--real", &o.real)
+        .text("--real-csv", &o.real_csv)
+        .text("--columns", &o.columns)
+        .text("--sim", &o.scenario)
+        .text("--out", &o.out)
+        .text("--imu-topic", &o.imu_topic)
+        .option("--truth-topic",
+                [&o](const std::string& topic) {
+                  o.truth_topic = topic;
+                  o.truth_topic_given = true;
+                })
+        .flag("--no-truth", &o.use_truth, false)
+        .number("--truth-smooth", &o.diag.truth_smooth)
+        .number("--truth-position-scale", &o.truth_position_scale)
+        .text("--temperature-topic", &o.temperature_topic)
+        .number("--accel-scale", &o.accel_scale)
+        .number("--gyro-scale", &o.gyro_scale)
+        .number("--time-scale", &o.time_scale)
+        .number("--rate", &o.rate)
+        .integer("--skip-lines", &o.skip_lines)
+        .integer("--ensemble", &o.diag.ensemble)
+        .number("--fit-fraction", &o.diag.fit_fraction)
+        .integer("--threads", &o.diag.threads)
+        .number("--max-duration", &o.max_duration)
+        .flag("--no-plots", &o.plots, false)
+        .integer("--steps", &o.steps);
+    if (!cli.parse(argc, argv))
+      return 0;
     if ((o.real.empty() == o.real_csv.empty()) || o.scenario.empty() || o.out.empty())
     {
       throw UsageError("one of --real / --real-csv, and --sim and --out are required");

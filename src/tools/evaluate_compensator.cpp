@@ -24,6 +24,7 @@
 
 #include "periodic_bias_compensation/core/compensator.h"
 #include "periodic_bias_compensation/sim/simulator.h"
+#include "periodic_bias_compensation/tools/command_line.h"
 
 namespace pbc = periodic_bias_compensation;
 namespace sim = periodic_bias_compensation::sim;
@@ -42,66 +43,44 @@ struct Options
   std::vector<std::pair<std::string, std::string>> estimates;  ///< name, bag pattern
 };
 
-void usage(std::ostream& out)
-{
-  out << "usage: evaluate_compensator --scenario FILE.yaml [--calibration-scenario STATIC.yaml]\n"
-         "                            [--seeds N] [--settle S] [--estimate NAME=BAG_PATTERN]...\n"
-         "                            [--markdown OUT.md] [--csv OUT.csv]\n"
-         "Simulates the scenario N times (seeds 1..N) and reports, per method and axis, the slow-motion\n"
-         "error after the run, the total position error after the run, and the wave RMS error after S\n"
-         "seconds as a percentage of the true wave RMS and of the significant wave height Hs = 4 x the\n"
-         "standard deviation of the true wave motion of that axis. With --calibration-scenario the constant bias\n"
-         "of the 'constant' and 'paper' methods comes from a run of that (static) scenario, as in the\n"
-         "paper; the default mode always calibrates itself from the data, causally.\n"
-         "--estimate adds a method NAME scored on the odometry another estimator wrote for the same\n"
-         "scenario and seed: BAG_PATTERN with {seed} replaced by the seed; its odometry/filtered is the\n"
-         "slow motion (linearly interpolated to the samples) and its odometry/wave, if present, the\n"
-         "wave motion (zero otherwise); positions as published (the estimator starts at zero).\n";
-}
+const char* kUsage =
+    "usage: evaluate_compensator --scenario FILE.yaml [--calibration-scenario STATIC.yaml]\n"
+    "                            [--seeds N] [--settle S] [--estimate NAME=BAG_PATTERN]...\n"
+    "                            [--markdown OUT.md] [--csv OUT.csv]\n"
+    "Simulates the scenario N times (seeds 1..N) and reports, per method and axis, the slow-motion\n"
+    "error after the run, the total position error after the run, and the wave RMS error after S\n"
+    "seconds as a percentage of the true wave RMS and of the significant wave height Hs = 4 x the\n"
+    "standard deviation of the true wave motion of that axis. With --calibration-scenario the constant bias\n"
+    "of the 'constant' and 'paper' methods comes from a run of that (static) scenario, as in the\n"
+    "paper; the default mode always calibrates itself from the data, causally.\n"
+    "--estimate adds a method NAME scored on the odometry another estimator wrote for the same\n"
+    "scenario and seed: BAG_PATTERN with {seed} replaced by the seed; its odometry/filtered is the\n"
+    "slow motion (linearly interpolated to the samples) and its odometry/wave, if present, the\n"
+    "wave motion (zero otherwise); positions as published (the estimator starts at zero).\n";
 
+/// The options, or nothing after --help.
 std::optional<Options> parse(int argc, char** argv)
 {
   Options o;
-  for (int i = 1; i < argc; ++i)
-  {
-    const std::string arg = argv[i];
-    auto value = [&]() -> std::string {
-      if (i + 1 >= argc)
-        throw std::runtime_error(arg + " needs a value");
-      return argv[++i];
-    };
-    if (arg == "--scenario")
-      o.scenario = value();
-    else if (arg == "--calibration-scenario")
-      o.calibration_scenario = value();
-    else if (arg == "--seeds")
-      o.seeds = std::stoi(value());
-    else if (arg == "--settle")
-      o.settle = std::stod(value());
-    else if (arg == "--markdown")
-      o.markdown = value();
-    else if (arg == "--csv")
-      o.csv = value();
-    else if (arg == "--estimate")
-    {
-      const std::string spec = value();
-      const auto eq = spec.find('=');
-      if (eq == std::string::npos || eq == 0 || eq + 1 == spec.size())
-        throw std::runtime_error("--estimate takes NAME=BAG_PATTERN, got '" + spec + "'");
-      o.estimates.emplace_back(spec.substr(0, eq), spec.substr(eq + 1));
-    }
-    else if (arg == "-h" || arg == "--help")
-    {
-      usage(std::cout);
-      std::exit(0);
-    }
-    else
-      throw std::runtime_error("unknown argument '" + arg + "'");
-  }
+  pbc::CommandLine cli(kUsage);
+  cli.text("--scenario", &o.scenario)
+      .text("--calibration-scenario", &o.calibration_scenario)
+      .integer("--seeds", &o.seeds)
+      .number("--settle", &o.settle)
+      .text("--markdown", &o.markdown)
+      .text("--csv", &o.csv)
+      .option("--estimate", [&o](const std::string& spec) {
+        const auto eq = spec.find('=');
+        if (eq == std::string::npos || eq == 0 || eq + 1 == spec.size())
+          throw pbc::UsageError("--estimate takes NAME=BAG_PATTERN, got '" + spec + "'");
+        o.estimates.emplace_back(spec.substr(0, eq), spec.substr(eq + 1));
+      });
+  if (!cli.parse(argc, argv))
+    return std::nullopt;
   if (o.scenario.empty())
-    throw std::runtime_error("--scenario is required");
+    throw pbc::UsageError("--scenario is required");
   if (o.seeds < 1)
-    throw std::runtime_error("--seeds must be >= 1");
+    throw pbc::UsageError("--seeds must be >= 1");
   return o;
 }
 
@@ -199,8 +178,9 @@ Errors evaluate(const std::vector<sim::Sample>& samples, const pbc::CompensatorC
                 const std::optional<Vector3>& bias, double settle)
 {
   pbc::Compensator compensator(config);
-  if (bias)
-    compensator.setConstantBias(*bias);
+  if (bias && !compensator.setConstantBias(*bias))
+    throw std::runtime_error("the calibration scenario's constant bias is not finite or beyond " +
+                             std::to_string(pbc::kMaxConstantBias) + " m/s^2");
   Scorer scorer(samples.front(), settle);
   pbc::CompensatorOutput out;
   for (const auto& s : samples)
@@ -365,12 +345,14 @@ int main(int argc, char** argv)
   Options options;
   try
   {
-    options = *parse(argc, argv);
+    const std::optional<Options> parsed = parse(argc, argv);
+    if (!parsed)
+      return 0;
+    options = *parsed;
   }
-  catch (const std::exception& e)
+  catch (const pbc::UsageError& e)
   {
-    std::cerr << "evaluate_compensator: " << e.what() << "\n";
-    usage(std::cerr);
+    std::cerr << "evaluate_compensator: " << e.what() << "\n" << kUsage;
     return 2;
   }
   try

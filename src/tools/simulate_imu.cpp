@@ -6,6 +6,7 @@
 #include <iomanip>
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <string>
 
@@ -14,6 +15,7 @@
 
 #include "periodic_bias_compensation/ros/sim_messages.h"
 #include "periodic_bias_compensation/sim/simulator.h"
+#include "periodic_bias_compensation/tools/command_line.h"
 
 namespace sim = periodic_bias_compensation::sim;
 namespace pbc = periodic_bias_compensation;
@@ -42,56 +44,23 @@ struct Options
   bool print_scenario = false;
 };
 
-Options parseOptions(int argc, char** argv)
+/// The options, or nothing after --help.
+std::optional<Options> parseOptions(int argc, char** argv)
 {
   Options o;
-  for (int i = 1; i < argc; ++i)
-  {
-    const std::string arg = argv[i];
-    const auto value = [&]() -> std::string {
-      if (i + 1 >= argc)
-      {
-        throw std::runtime_error(arg + " needs a value");
-      }
-      return argv[++i];
-    };
-    if (arg == "--scenario")
-      o.scenario = value();
-    else if (arg == "--out")
-      o.bag = value();
-    else if (arg == "--csv")
-      o.csv = value();
-    else if (arg == "--seed")
-    {
-      o.seed = std::stoull(value());
-      o.has_seed = true;
-    }
-    else if (arg == "--duration")
-    {
-      o.duration = std::stod(value());
-      o.has_duration = true;
-    }
-    else if (arg == "--start-time")
-    {
-      o.start_time = std::stod(value());
-      o.has_start_time = true;
-    }
-    else if (arg == "--list-effects")
-      o.list_effects = true;
-    else if (arg == "--print-scenario")
-      o.print_scenario = true;
-    else if (arg == "--help" || arg == "-h")
-    {
-      std::cout << kUsage;
-      std::exit(0);
-    }
-    else
-      throw std::runtime_error("unknown argument " + arg);
-  }
+  pbc::CommandLine cli(kUsage);
+  cli.text("--scenario", &o.scenario)
+      .text("--out", &o.bag)
+      .text("--csv", &o.csv)
+      .integer("--seed", &o.seed, &o.has_seed)
+      .number("--duration", &o.duration, &o.has_duration)
+      .number("--start-time", &o.start_time, &o.has_start_time)
+      .flag("--list-effects", &o.list_effects)
+      .flag("--print-scenario", &o.print_scenario);
+  if (!cli.parse(argc, argv))
+    return std::nullopt;
   if (!o.list_effects && o.scenario.empty())
-  {
-    throw std::runtime_error("--scenario is required");
-  }
+    throw pbc::UsageError("--scenario is required");
   return o;
 }
 
@@ -229,7 +198,10 @@ int main(int argc, char** argv)
 {
   try
   {
-    const Options o = parseOptions(argc, argv);
+    const std::optional<Options> options = parseOptions(argc, argv);
+    if (!options)
+      return 0;
+    const Options& o = *options;
     if (o.list_effects)
     {
       listEffects();
@@ -238,9 +210,14 @@ int main(int argc, char** argv)
     ros::Time::init();
     return run(o);
   }
-  catch (const std::exception& e)
+  catch (const pbc::UsageError& e)
   {
     std::cerr << "simulate_imu: " << e.what() << "\n" << kUsage;
+    return 2;
+  }
+  catch (const std::exception& e)
+  {
+    std::cerr << "simulate_imu: " << e.what() << "\n";
     return 1;
   }
 }

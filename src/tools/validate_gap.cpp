@@ -24,8 +24,10 @@
 #include "periodic_bias_compensation/gap/gap.h"
 #include "periodic_bias_compensation/sim/effects.h"
 #include "periodic_bias_compensation/sim/scenario.h"
+#include "periodic_bias_compensation/tools/command_line.h"
 
 namespace gap = periodic_bias_compensation::gap;
+namespace pbc = periodic_bias_compensation;
 namespace sim = periodic_bias_compensation::sim;
 
 namespace
@@ -373,66 +375,32 @@ struct CaseResult
 int main(int argc, char** argv)
 {
   Options opt;
-  for (int i = 1; i < argc; ++i)
+  pbc::CommandLine cli(
+      "usage: validate_gap [--small] [--seeds N] [--duration S] [--rate HZ] [--md FILE] [--json FILE]\n"
+      "                    [--quiet] [--verbose] [--effect NAME] [--motion NAME] [--bench-hours H]\n"
+      "Withholds each named effect from a simulated 'real' recording, diagnoses the gap against the\n"
+      "scenario without it and scores the verdicts (docs/gap.md). --bench-hours H times one diagnosis\n"
+      "of H hours of 100 Hz data instead.\n");
+  cli.flag("--small", &opt.small)
+      .integer("--seeds", &opt.seeds)
+      .number("--duration", &opt.duration)
+      .number("--rate", &opt.rate)
+      .text("--md", &opt.md)
+      .text("--json", &opt.json)
+      .flag("--quiet", &opt.quiet)
+      .flag("--verbose", &opt.verbose)
+      .text("--effect", &opt.only_effect)
+      .text("--motion", &opt.only_motion)
+      .number("--bench-hours", &opt.bench_hours);
+  try
   {
-    const std::string a = argv[i];
-    auto value = [&]() -> std::string {
-      if (i + 1 >= argc)
-      {
-        std::cerr << "validate_gap: missing value after " << a << "\n";
-        std::exit(2);
-      }
-      return argv[++i];
-    };
-    if (a == "--small")
-    {
-      opt.small = true;
-    }
-    else if (a == "--seeds")
-    {
-      opt.seeds = std::stoi(value());
-    }
-    else if (a == "--duration")
-    {
-      opt.duration = std::stod(value());
-    }
-    else if (a == "--rate")
-    {
-      opt.rate = std::stod(value());
-    }
-    else if (a == "--md")
-    {
-      opt.md = value();
-    }
-    else if (a == "--json")
-    {
-      opt.json = value();
-    }
-    else if (a == "--quiet")
-    {
-      opt.quiet = true;
-    }
-    else if (a == "--verbose")
-    {
-      opt.verbose = true;
-    }
-    else if (a == "--effect")
-    {
-      opt.only_effect = value();
-    }
-    else if (a == "--motion")
-    {
-      opt.only_motion = value();
-    }
-    else if (a == "--bench-hours")
-    {
-      opt.bench_hours = std::stod(value());
-    }
-    else
-    {
-      std::cerr << "usage: validate_gap [--small] [--seeds N] [--duration S] [--rate HZ] [--md FILE] [--json FILE] [--quiet]\n";
-      return 2;
-    }
+    if (!cli.parse(argc, argv))
+      return 0;
+  }
+  catch (const pbc::UsageError& e)
+  {
+    std::cerr << "validate_gap: " << e.what() << "\n" << cli.usage();
+    return 2;
   }
   if (opt.bench_hours > 0)
   {

@@ -26,6 +26,7 @@
 #include <iostream>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <thread>
@@ -41,6 +42,7 @@
 
 #include "periodic_bias_compensation/ros/sim_messages.h"
 #include "periodic_bias_compensation/sim/simulator.h"
+#include "periodic_bias_compensation/tools/command_line.h"
 
 namespace pbc = periodic_bias_compensation;
 namespace sim = periodic_bias_compensation::sim;
@@ -331,44 +333,28 @@ private:
   std::vector<RssRow> rss_;
 };
 
-Options parseOptions(int argc, char** argv)
+const char* kUsage =
+    "usage: nodelet_benchmark --transport intra|tcp --scenario FILE.yaml --rate HZ --duration S\n"
+    "                         [--closed-loop] [--stream] [--rss-csv FILE] [--rss-every N]\n";
+
+/// The options, or nothing after --help.
+std::optional<Options> parseOptions(int argc, char** argv)
 {
   Options o;
-  for (int i = 1; i < argc; ++i)
-  {
-    const std::string arg = argv[i];
-    const auto value = [&]() -> std::string {
-      if (i + 1 >= argc)
-      {
-        throw std::runtime_error(arg + " needs a value");
-      }
-      return argv[++i];
-    };
-    if (arg == "--transport")
-      o.transport = value();
-    else if (arg == "--scenario")
-      o.scenario = value();
-    else if (arg == "--rate")
-      o.rate = std::stod(value());
-    else if (arg == "--duration")
-      o.duration = std::stod(value());
-    else if (arg == "--closed-loop")
-      o.closed_loop = true;
-    else if (arg == "--stream")
-      o.stream = true;
-    else if (arg == "--rss-csv")
-      o.rss_csv = value();
-    else if (arg == "--rss-every")
-      o.rss_every = std::stoll(value());
-    else
-      throw std::runtime_error("unknown argument " + arg);
-  }
+  pbc::CommandLine cli(kUsage);
+  cli.text("--transport", &o.transport)
+      .text("--scenario", &o.scenario)
+      .number("--rate", &o.rate)
+      .number("--duration", &o.duration)
+      .flag("--closed-loop", &o.closed_loop)
+      .flag("--stream", &o.stream)
+      .text("--rss-csv", &o.rss_csv)
+      .integer("--rss-every", &o.rss_every);
+  if (!cli.parse(argc, argv))
+    return std::nullopt;
   if ((o.transport != "intra" && o.transport != "tcp") || o.scenario.empty() || !(o.rate > 0.0) ||
       !(o.duration > 0.0))
-  {
-    throw std::runtime_error("usage: nodelet_benchmark --transport intra|tcp --scenario FILE.yaml --rate HZ "
-                             "--duration S [--closed-loop] [--stream] [--rss-csv FILE] [--rss-every N]");
-  }
+    throw pbc::UsageError("--transport intra|tcp, --scenario, --rate > 0 and --duration > 0 are required");
   return o;
 }
 }  // namespace
@@ -379,11 +365,14 @@ int main(int argc, char** argv)
   Options options;
   try
   {
-    options = parseOptions(argc, argv);
+    const std::optional<Options> parsed = parseOptions(argc, argv);
+    if (!parsed)
+      return 0;
+    options = *parsed;
   }
-  catch (const std::exception& e)
+  catch (const pbc::UsageError& e)
   {
-    std::cerr << e.what() << std::endl;
+    std::cerr << "nodelet_benchmark: " << e.what() << "\n" << kUsage;
     return 2;
   }
   try
