@@ -25,6 +25,9 @@ constexpr int kMaxObserverSteps = 10000;
 /// Highest sample rate planned for [Hz]: a stamp step far below any IMU's period (a driver
 /// glitch) must not size FFT windows and tables for an absurd rate.
 constexpr double kMaxSampleRate = 10000.0;
+/// The period search runs at the IMU rate decimated to at least this many times max_frequency
+/// (anti-alias: FrequencyTracker's triangular filter, -25 dB where aliases fold into the band).
+constexpr double kDecimatedRateFactor = 5.0;
 
 bool isFinite(const Vector3& v)
 {
@@ -606,9 +609,13 @@ private:
   {
     const int window = std::max(16, static_cast<int>(std::lround(config_.fft_window * rate)));
     const int table = std::max(4, static_cast<int>(std::ceil(rate / config_.min_frequency)) + 2);
+    // The period search needs rate / M >= 5 x max_frequency, not the IMU's rate: at 100 Hz and
+    // 2 Hz the transform is 10 times shorter (docs/algorithm.md, "Period search").
+    const int decimation = std::clamp(static_cast<int>(rate / (kDecimatedRateFactor * config_.max_frequency)), 1,
+                                      window / 16);
     for (auto& axis : axes_)
     {
-      axis.tracker = std::make_unique<FrequencyTracker>(window, rate);
+      axis.tracker = std::make_unique<FrequencyTracker>(window, rate, decimation);
       axis.locked = false;
       axis.frequency = 0.0;
       axis.v_table = SignalHistory(table);

@@ -61,13 +61,16 @@ struct FrequencyTracker::Plan
   double window_sum = 0.0;
 };
 
-FrequencyTracker::FrequencyTracker(int window_samples, double sample_rate)
-  : n_(window_samples), rate_(sample_rate)
+FrequencyTracker::FrequencyTracker(int window_samples, double sample_rate, int decimation)
+  : n_(decimation >= 1 ? window_samples / decimation : 0), rate_(sample_rate / decimation), decimation_(decimation)
 {
-  if (window_samples < 16)
-    throw std::invalid_argument("FrequencyTracker: window must hold at least 16 samples");
+  if (decimation < 1)
+    throw std::invalid_argument("FrequencyTracker: decimation must be >= 1");
+  if (n_ < 16)
+    throw std::invalid_argument("FrequencyTracker: window must hold at least 16 samples after decimation");
   if (!(sample_rate > 0.0) || !std::isfinite(sample_rate))
     throw std::invalid_argument("FrequencyTracker: sample rate must be positive");
+  moving_.assign(decimation_, 0.0);
   ring_.assign(n_, 0.0);
   times_.assign(n_, 0.0);
   fft_size_ = fastFftSize(n_);
@@ -79,10 +82,20 @@ FrequencyTracker::~FrequencyTracker() = default;
 
 void FrequencyTracker::push(double value)
 {
-  push(value, count_ > 0 ? times_[(head_ - 1 + n_) % n_] + 1.0 / rate_ : 0.0);
+  push(value, inputs_ > 0 ? last_time_ + 1.0 / sampleRate() : 0.0);
 }
 
 void FrequencyTracker::push(double value, double t)
+{
+  last_time_ = t;
+  ++inputs_;
+  if (decimation_ == 1)
+    store(value, t);
+  else
+    decimate(value, t);
+}
+
+void FrequencyTracker::store(double value, double t)
 {
   times_[head_] = t;
   ring_[head_] = value;
@@ -90,11 +103,41 @@ void FrequencyTracker::push(double value, double t)
   ++count_;
 }
 
+void FrequencyTracker::decimate(double value, double t)
+{
+  const int m = decimation_;
+  moving_sum_ += value - moving_[moving_head_];
+  moving_[moving_head_] = value;
+  if (++moving_head_ == m)
+  {
+    moving_head_ = 0;
+    // Exact again once per M inputs: no rounding drift over weeks of samples.
+    moving_sum_ = 0.0;
+    for (double v : moving_)
+      moving_sum_ += v;
+  }
+  if (inputs_ < m)
+    return;  // the moving average is not full yet
+  block_sum_ += moving_sum_;
+  block_time_ += t;
+  if (++block_count_ < m)
+    return;
+  store(block_sum_ / (static_cast<double>(m) * m), block_time_ / m);
+  block_sum_ = 0.0;
+  block_time_ = 0.0;
+  block_count_ = 0;
+}
+
 void FrequencyTracker::clear()
 {
   std::fill(ring_.begin(), ring_.end(), 0.0);
   head_ = 0;
   count_ = 0;
+  std::fill(moving_.begin(), moving_.end(), 0.0);
+  moving_head_ = 0;
+  moving_sum_ = block_sum_ = block_time_ = 0.0;
+  block_count_ = 0;
+  inputs_ = 0;
 }
 
 bool FrequencyTracker::full() const
@@ -104,7 +147,7 @@ bool FrequencyTracker::full() const
 
 int FrequencyTracker::samples() const
 {
-  return static_cast<int>(std::min<long>(count_, n_));
+  return static_cast<int>(std::min<long>(count_, n_)) * decimation_;
 }
 
 FrequencyEstimate FrequencyTracker::analyse(double f_min, double f_max, double min_peak_ratio)

@@ -71,4 +71,53 @@ TEST(FrequencyTracker, RejectsBadConstruction)
   EXPECT_THROW(FrequencyTracker(8, 100.0), std::invalid_argument);
   EXPECT_THROW(FrequencyTracker(100, 0.0), std::invalid_argument);
   EXPECT_THROW(FrequencyTracker(100, NAN), std::invalid_argument);
+  EXPECT_THROW(FrequencyTracker(3000, 100.0, 0), std::invalid_argument);
+  EXPECT_THROW(FrequencyTracker(150, 100.0, 10), std::invalid_argument);  // 15 samples after decimation
+}
+
+TEST(FrequencyTracker, DecimatedMatchesFullRate)
+{
+  // 100 Hz decimated by 10 (the compensator's choice for max_frequency 2 Hz): same accuracy in
+  // the band, 10 times shorter transform. windowSamples() and samples() count input samples.
+  for (double f : { 0.11, 0.3, 0.443, 1.234, 1.9 })
+  {
+    FrequencyTracker tracker(3000, 100.0, 10);
+    EXPECT_EQ(tracker.windowSamples(), 3000);
+    std::mt19937 rng(3);
+    std::normal_distribution<double> normal(0.0, 0.05);
+    for (int k = 0; k < 4000; ++k)
+      tracker.push(0.7 * std::sin(2 * M_PI * f * k / 100.0 + 0.4) + 0.2 + normal(rng), 5.0 + k / 100.0);
+    EXPECT_TRUE(tracker.full());
+    EXPECT_EQ(tracker.samples(), 3000);
+    const FrequencyEstimate e = tracker.analyse(0.05, 2.0, 30.0);
+    ASSERT_TRUE(e.locked) << f;
+    EXPECT_NEAR(e.frequency, f, 0.002) << "f = " << f;
+  }
+}
+
+TEST(FrequencyTracker, DecimationFiltersAliasesOut)
+{
+  // An 8.7 Hz engine vibration twice as strong as a 0.12 Hz sea: decimated to 10 Hz without a
+  // filter it would fold onto 1.3 Hz and win; the triangular filter takes it down by ~25 dB.
+  FrequencyTracker tracker(3000, 100.0, 10);
+  for (int k = 0; k < 3000; ++k)
+    tracker.push(1.0 * std::sin(2 * M_PI * 8.7 * k / 100.0) + 0.5 * std::sin(2 * M_PI * 0.12 * k / 100.0),
+                 k / 100.0);
+  const FrequencyEstimate e = tracker.analyse(0.05, 2.0, 30.0);
+  ASSERT_TRUE(e.locked);
+  EXPECT_NEAR(e.frequency, 0.12, 0.002);
+}
+
+TEST(FrequencyTracker, DecimatedClearStartsAnew)
+{
+  FrequencyTracker tracker(3000, 100.0, 10);
+  for (int k = 0; k < 3000; ++k)
+    tracker.push(std::sin(2 * M_PI * 0.5 * k / 100.0), k / 100.0);
+  tracker.clear();
+  EXPECT_EQ(tracker.samples(), 0);
+  for (int k = 0; k < 3000; ++k)
+    tracker.push(std::sin(2 * M_PI * 0.2 * k / 100.0), 100.0 + k / 100.0);
+  const FrequencyEstimate e = tracker.analyse(0.05, 2.0, 30.0);
+  ASSERT_TRUE(e.locked);
+  EXPECT_NEAR(e.frequency, 0.2, 0.002);
 }

@@ -12,18 +12,24 @@ struct FrequencyEstimate
   bool locked = false;      ///< a peak stood out of the band (peak/median power >= threshold)
   double frequency = 0.0;   ///< dominant frequency with sub-bin interpolation [Hz]
   double peak_ratio = 0.0;  ///< peak power / median power in the band [-]
-  double amplitude = 0.0;   ///< amplitude of the dominant sinusoid [signal units]
+  double amplitude = 0.0;   ///< amplitude of the dominant sinusoid after the decimation filter [signal units]
 };
 
 /// Sliding-window FFT of one signal. The FFTW plan is made once per window size and reused.
 /// push() is O(1); analyse() costs one real FFT of the window (call it every hop, not every
 /// sample).
+///
+/// With decimation M > 1 the window holds the input low-pass filtered and decimated by M: a
+/// moving average of M samples taken again over each block of M (a triangular filter, response
+/// sinc^2, nulls at multiples of rate/M), so the transform is M times shorter. Choose M so that
+/// rate/M is several times the highest frequency searched (Compensator: 5 x max_frequency).
 class FrequencyTracker
 {
 public:
-  /// @param window_samples FFT window length [samples], >= 16
-  /// @param sample_rate    [Hz], > 0
-  FrequencyTracker(int window_samples, double sample_rate);
+  /// @param window_samples FFT window length [input samples], >= 16 x decimation
+  /// @param sample_rate    input rate [Hz], > 0
+  /// @param decimation     M >= 1 (1: every sample goes into the window)
+  FrequencyTracker(int window_samples, double sample_rate, int decimation = 1);
   ~FrequencyTracker();
   FrequencyTracker(const FrequencyTracker&) = delete;
   FrequencyTracker& operator=(const FrequencyTracker&) = delete;
@@ -36,10 +42,11 @@ public:
   void clear();
   /// True once the window has been filled.
   bool full() const;
-  /// Samples in the window so far (at most windowSamples()).
+  /// Input samples the window spans so far (at most windowSamples()).
   int samples() const;
-  int windowSamples() const { return n_; }
-  double sampleRate() const { return rate_; }
+  int windowSamples() const { return n_ * decimation_; }
+  double sampleRate() const { return rate_ * decimation_; }
+  int decimation() const { return decimation_; }
 
   /// Dominant frequency in [f_min, f_max] [Hz] (DC excluded, Hann window, mean removed,
   /// Gaussian interpolation of the peak between bins). Not locked when the window is not
@@ -48,9 +55,22 @@ public:
 
 private:
   struct Plan;
-  int n_;          ///< window [samples]
+  void store(double value, double t);     ///< into the window (decimated rate)
+  void decimate(double value, double t);  ///< through the anti-alias filter
+
+  int n_;          ///< window [samples at the decimated rate]
   int fft_size_;   ///< transform size, >= n_ (zero-padded)
-  double rate_;
+  double rate_;    ///< decimated rate [Hz]
+  int decimation_ = 1;
+  // Anti-alias filter (decimation_ > 1): moving sum of the last M inputs, summed over a block.
+  std::vector<double> moving_;  ///< last M inputs
+  int moving_head_ = 0;
+  double moving_sum_ = 0.0;
+  double block_sum_ = 0.0;
+  double block_time_ = 0.0;     ///< sum of the block's input times
+  int block_count_ = 0;
+  long inputs_ = 0;
+  double last_time_ = 0.0;      ///< time of the newest input [s]
   std::vector<double> ring_;
   std::vector<double> times_;
   int head_ = 0;
