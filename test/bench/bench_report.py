@@ -75,19 +75,25 @@ def nodelet(runs_path, png):
 
 
 def bag(runs_path, core_csv):
-    runs = {'floor': [], 'compensate_bag': []}
+    runs = {'floor': [], 'whole_bag': [], 'compensate_bag': []}
     for line in open(runs_path):
         label, values = line.rstrip('\n').split('|', 1)
         runs[label].append(fields(values))
     messages = int(runs['floor'][0]['messages'])
-    rate = {k: statistics.median(float(r['messages_per_s']) for r in v) for k, v in runs.items()}
-    wall = {k: statistics.median(float(r['wall_s']) for r in v) for k, v in runs.items()}
-    print('| program | IMU messages | wall time [s] (median of %d) | messages per second | ratio to the floor |'
-          % len(runs['floor']))
-    print('|---|---|---|---|---|')
-    print('| read-only floor (`bag_read_floor`) | %d | %.2f | %.3g | 1 |' % (messages, wall['floor'], rate['floor']))
-    print('| `compensate_bag` | %d | %.2f | %.3g | **%.1f** |' % (
-        messages, wall['compensate_bag'], rate['compensate_bag'], rate['floor'] / rate['compensate_bag']))
+    rate = {k: statistics.median(float(r['messages_per_s']) for r in v) for k, v in runs.items() if v}
+    wall = {k: statistics.median(float(r['wall_s']) for r in v) for k, v in runs.items() if v}
+    print('| program | IMU messages | wall time [s] (median of %d) | IMU messages per second '
+          '| ratio to the IMU-topic floor | ratio to the whole-bag floor |' % len(runs['floor']))
+    print('|---|---|---|---|---|---|')
+    rows = [('read-only floor, IMU topic (`bag_read_floor`)', 'floor'),
+            ('read-only floor, whole bag (`bag_read_floor --whole-bag`)', 'whole_bag'),
+            ('`compensate_bag`', 'compensate_bag')]
+    for title, key in rows:
+        if key not in rate:
+            continue
+        ratio = lambda floor: '%.1f' % (rate[floor] / rate[key]) if floor in rate else '-'
+        print('| %s | %d | %.2f | %.3g | %s | %s |' % (title, messages, wall[key], rate[key], ratio('floor'),
+                                                    ('**%s**' if key == 'compensate_bag' else '%s') % ratio('whole_bag')))
     print()
     # The core against both floors: reading an in-memory array and reading the bag.
     core = {}
