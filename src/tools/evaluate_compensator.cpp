@@ -23,6 +23,7 @@
 #include <rosbag/view.h>
 
 #include "periodic_bias_compensation/core/compensator.h"
+#include "periodic_bias_compensation/sim/core_sample.h"
 #include "periodic_bias_compensation/sim/simulator.h"
 #include "periodic_bias_compensation/tools/command_line.h"
 
@@ -94,17 +95,6 @@ std::vector<sim::Sample> simulate(const sim::Scenario& scenario, std::uint64_t s
     if (!s.dropped)
       samples.push_back(s);
   return samples;
-}
-
-pbc::ImuSample toImu(const sim::Sample& s)
-{
-  pbc::ImuSample imu;
-  imu.t = s.stamp;
-  imu.specific_force = s.accel;
-  imu.angular_rate = s.gyro;
-  imu.has_orientation = true;
-  imu.orientation = s.orientation;
-  return imu;
 }
 
 /// Errors of one method on one run, per axis.
@@ -185,7 +175,7 @@ Errors evaluate(const std::vector<sim::Sample>& samples, const pbc::CompensatorC
   pbc::CompensatorOutput out;
   for (const auto& s : samples)
   {
-    compensator.addSample(toImu(s), &out);
+    compensator.addSample(sim::toImuSample(s), &out);
     scorer.add(s, out.position_filtered, out.position_wave);
   }
   return scorer.finish(samples.back(), out.position_filtered, out.position_wave);
@@ -371,7 +361,7 @@ int main(int argc, char** argv)
       config.calibration_duration = rest.duration - 1.5 / rest.rate;
       pbc::Compensator calibration(config);
       for (const auto& s : simulate(rest, 1000))
-        calibration.addSample(toImu(s), nullptr);
+        calibration.addSample(sim::toImuSample(s), nullptr);
       if (!calibration.calibrated())
         throw std::runtime_error("the calibration scenario did not complete a calibration window");
       calibrated_bias = calibration.constantBias();

@@ -9,6 +9,7 @@
 
 #include "periodic_bias_compensation/core/compensator.h"
 #include "periodic_bias_compensation/core/frequency_tracker.h"
+#include "periodic_bias_compensation/sim/core_sample.h"
 #include "periodic_bias_compensation/sim/simulator.h"
 
 namespace pbc = periodic_bias_compensation;
@@ -30,13 +31,7 @@ const std::vector<pbc::ImuSample>& samples(const std::string& scenario_name)
   {
     if (s.dropped)
       continue;
-    pbc::ImuSample imu;
-    imu.t = s.stamp;
-    imu.specific_force = s.accel;
-    imu.angular_rate = s.gyro;
-    imu.has_orientation = true;
-    imu.orientation = s.orientation;
-    out.push_back(imu);
+    out.push_back(sim::toImuSample(s));
   }
   return cache.emplace(scenario_name, std::move(out)).first->second;
 }

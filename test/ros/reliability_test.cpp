@@ -24,6 +24,7 @@
 #include <gtest/gtest.h>
 
 #include "periodic_bias_compensation/core/compensator.h"
+#include "periodic_bias_compensation/sim/core_sample.h"
 #include "periodic_bias_compensation/sim/scenario.h"
 #include "periodic_bias_compensation/sim/simulator.h"
 
@@ -75,13 +76,7 @@ Record simulate(const std::string& name, double duration = -1.0, double start_ti
     {
       continue;
     }
-    pbc::ImuSample sample;
-    sample.t = s.stamp;
-    sample.specific_force = s.accel;
-    sample.angular_rate = s.gyro;
-    sample.has_orientation = true;
-    sample.orientation = s.orientation;
-    record.samples.push_back(sample);
+    record.samples.push_back(sim::toImuSample(s));
     record.truth.push_back(s);
   }
   return record;
@@ -379,13 +374,7 @@ TEST(Reliability, LongRunMemoryAndCostFlatOutputsBounded)
       {
         continue;
       }
-      pbc::ImuSample sample;
-      sample.t = s.stamp;
-      sample.specific_force = s.accel;
-      sample.angular_rate = s.gyro;
-      sample.has_orientation = true;
-      sample.orientation = s.orientation;
-      block.push_back(sample);
+      block.push_back(sim::toImuSample(s));
       truth.push_back(s);
     }
     if (block.empty())
