@@ -112,6 +112,17 @@ def bag(runs_path, core_csv):
         print('| %s | %.3g | %.0f | %s | %.2f |' % (name, items, 1e9 / items,
               '%.0f' % (memory / items) if memory else '-', rate['floor'] / items))
     print()
+    core_rate = core.get('compensate/moored_sea_state_4_default')
+    if core_rate and 'compensate_bag' in wall:
+        core_s = messages / core_rate
+        print('Where `compensate_bag`\'s time goes: the core (default mode, at the benchmark\'s rate above) '
+              'accounts for %.2f s of its %.2f s (%.0f %%), reading the whole bag for %.2f s (%.0f %%); the rest '
+              'is building the output messages and rosbag writing six messages per IMU sample (three outputs, three copied ground-truth '
+              'messages; every `rosbag::Bag::write` seeks to the end of the file twice, bag.h) and LZ4-compressing '
+              'them.' % (core_s, wall['compensate_bag'], 100 * core_s / wall['compensate_bag'],
+                         wall.get('whole_bag', float('nan')),
+                         100 * wall.get('whole_bag', float('nan')) / wall['compensate_bag']))
+        print()
 
 
 def memory(nodelet_csv, bag_rss, png):
