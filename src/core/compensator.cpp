@@ -336,14 +336,12 @@ bool CompensatorConfig::validate(std::string* why) const
     // error over one period is multiplied by (1 - alpha) each period, so 0 <= alpha < 2 keeps it
     // stable; the mid-range term adds damping that destabilises the loop above beta = 12
     // (measured, test_compensator: PaperGainLimits).
-    check(std::isfinite(g.alpha_v) && g.alpha_v >= 0.0 && g.alpha_v < 2.0, "alpha_v_" + axis,
-          "0 <= alpha < 2 (the comb loop is unstable from 2 on)", g.alpha_v);
-    check(std::isfinite(g.alpha_p) && g.alpha_p >= 0.0 && g.alpha_p < 2.0, "alpha_p_" + axis,
-          "0 <= alpha < 2 (the comb loop is unstable from 2 on)", g.alpha_p);
-    check(std::isfinite(g.beta_v) && g.beta_v >= 0.0 && g.beta_v <= 12.0, "beta_v_" + axis,
-          "0 <= beta <= 12 (larger values make the loop oscillate and diverge)", g.beta_v);
-    check(std::isfinite(g.beta_p) && g.beta_p >= 0.0 && g.beta_p <= 12.0, "beta_p_" + axis,
-          "0 <= beta <= 12 (larger values make the loop oscillate and diverge)", g.beta_p);
+    for (const auto& [name, alpha] : { std::pair{ "alpha_v_", g.alpha_v }, std::pair{ "alpha_p_", g.alpha_p } })
+      check(std::isfinite(alpha) && alpha >= 0.0 && alpha < 2.0, name + axis,
+            "0 <= alpha < 2 (the comb loop is unstable from 2 on)", alpha);
+    for (const auto& [name, beta] : { std::pair{ "beta_v_", g.beta_v }, std::pair{ "beta_p_", g.beta_p } })
+      check(std::isfinite(beta) && beta >= 0.0 && beta <= 12.0, name + axis,
+            "0 <= beta <= 12 (larger values make the loop oscillate and diverge)", beta);
   }
   check(calibration_duration >= 0.0 && calibration_duration <= 3600.0, "calibration_duration",
         "0 <= s <= 3600", calibration_duration);

@@ -230,6 +230,7 @@ TEST(Compensator, PaperGainLimits)
   std::string why;
   config.gains[0].alpha_p = 2.0;
   EXPECT_FALSE(config.validate(&why));
+  EXPECT_NE(why.find("alpha_p_x = 2 is out of range"), std::string::npos) << why;
   config = modeConfig(Mode::kPaper);
   config.gains[2].beta_v = 12.5;
   EXPECT_FALSE(config.validate(&why));
