@@ -19,6 +19,7 @@
 
 #include "periodic_bias_compensation/gap/gap.h"
 #include "periodic_bias_compensation/sim/scenario.h"
+#include "../common/shell.h"
 
 namespace gap = periodic_bias_compensation::gap;
 namespace sim = periodic_bias_compensation::sim;
@@ -26,29 +27,8 @@ namespace fs = std::filesystem;
 
 namespace
 {
-struct CommandResult
-{
-  int status = -1;
-  std::string output;
-};
-
-CommandResult shell(const std::string& command)
-{
-  CommandResult result;
-  FILE* pipe = popen((command + " 2>&1").c_str(), "r");
-  if (pipe == nullptr)
-  {
-    return result;
-  }
-  std::array<char, 512> buffer;
-  while (fgets(buffer.data(), buffer.size(), pipe) != nullptr)
-  {
-    result.output += buffer.data();
-  }
-  const int status = pclose(pipe);
-  result.status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return result;
-}
+using pbc_test::CommandResult;
+using pbc_test::shell;
 
 std::string readAll(const std::string& path)
 {

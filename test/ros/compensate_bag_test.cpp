@@ -18,36 +18,16 @@
 #include <rosbag/view.h>
 
 #include "periodic_bias_compensation/BiasState.h"
+#include "../common/shell.h"
 
 namespace
 {
-struct CommandResult
-{
-  int status = -1;
-  std::string output;  ///< stdout and stderr
-};
-
-CommandResult shell(const std::string& command)
-{
-  CommandResult result;
-  FILE* pipe = popen(command.c_str(), "r");
-  if (pipe == nullptr)
-  {
-    return result;
-  }
-  std::array<char, 512> buffer;
-  while (fgets(buffer.data(), buffer.size(), pipe) != nullptr)
-  {
-    result.output += buffer.data();
-  }
-  const int status = pclose(pipe);
-  result.status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return result;
-}
+using pbc_test::CommandResult;
+using pbc_test::shell;
 
 CommandResult run(const std::string& args)
 {
-  return shell(std::string(PBC_COMPENSATE_BAG) + " " + args + " 2>&1");
+  return shell(std::string(PBC_COMPENSATE_BAG) + " " + args);
 }
 
 bool exists(const std::string& path)
@@ -296,7 +276,7 @@ TEST_F(CompensateBag, BagEndingMidChunkIsRefusedWithAClearMessage)
   // then processes that part (partial output by the operator's choice, complete for what was kept).
   if (shell("command -v rosbag").status == 0)
   {
-    const CommandResult reindex = shell("mkdir -p " + dir_ + "/re && cd " + dir_ + " && rosbag reindex --output-dir=" + dir_ + "/re cut.bag 2>&1");
+    const CommandResult reindex = shell("mkdir -p " + dir_ + "/re && cd " + dir_ + " && rosbag reindex --output-dir=" + dir_ + "/re cut.bag");
     const std::string recovered = dir_ + "/re/cut.bag";
     if (reindex.status == 0 && exists(recovered))
     {

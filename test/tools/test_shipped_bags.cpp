@@ -20,33 +20,14 @@
 #include <rosbag/view.h>
 #include <sensor_msgs/Imu.h>
 
+#include "../common/shell.h"
+
 namespace fs = std::filesystem;
 
 namespace
 {
-struct CommandResult
-{
-  int status = -1;
-  std::string output;
-};
-
-CommandResult shell(const std::string& command)
-{
-  CommandResult result;
-  FILE* pipe = popen((command + " 2>&1").c_str(), "r");
-  if (pipe == nullptr)
-  {
-    return result;
-  }
-  std::array<char, 512> buffer;
-  while (fgets(buffer.data(), buffer.size(), pipe) != nullptr)
-  {
-    result.output += buffer.data();
-  }
-  const int status = pclose(pipe);
-  result.status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return result;
-}
+using pbc_test::CommandResult;
+using pbc_test::shell;
 
 bool finite(const nav_msgs::Odometry& o)
 {
