@@ -8,11 +8,14 @@
 //       [--calibration-scenario config/scenarios/paper_static.yaml] [--seeds 5] [--settle 20]
 //       [--estimate NAME=BAG_PATTERN]... [--markdown OUT.md] [--csv OUT.csv]
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <iostream>
+#include <limits>
 #include <map>
+#include <memory>
 #include <optional>
 #include <sstream>
 #include <string>
@@ -39,6 +42,7 @@ struct Options
   std::string calibration_scenario;
   int seeds = 5;
   double settle = 20.0;
+  double duration = 0.0;  ///< > 0: replaces the scenario's duration [s]
   std::string markdown;
   std::string csv;
   std::vector<std::pair<std::string, std::string>> estimates;  ///< name, bag pattern
@@ -46,14 +50,18 @@ struct Options
 
 const char* kUsage =
     "usage: evaluate_compensator --scenario FILE.yaml [--calibration-scenario STATIC.yaml]\n"
-    "                            [--seeds N] [--settle S] [--estimate NAME=BAG_PATTERN]...\n"
+    "                            [--seeds N] [--settle S] [--duration S] [--estimate NAME=BAG_PATTERN]...\n"
     "                            [--markdown OUT.md] [--csv OUT.csv]\n"
     "Simulates the scenario N times (seeds 1..N) and reports, per method and axis, the slow-motion\n"
     "error after the run, the total position error after the run, and the wave RMS error after S\n"
     "seconds as a percentage of the true wave RMS and of the significant wave height Hs = 4 x the\n"
     "standard deviation of the true wave motion of that axis. With --calibration-scenario the constant bias\n"
     "of the 'constant' and 'paper' methods comes from a run of that (static) scenario, as in the\n"
-    "paper; the default mode always calibrates itself from the data, causally.\n"
+    "paper; the default mode always calibrates itself from the data, causally. The slow-motion error\n"
+    "is also reported at 60 s, 10 min and 30 min of data (--duration S runs the scenario for S s).\n"
+    "A second table gives the default mode's period tracking per axis: time of the first lock, share\n"
+    "of FFT hops locked after it, and the error of its dominant frequency against the dominant\n"
+    "frequency of the true wave acceleration over the same window (median and 95th percentile).\n"
     "--estimate adds a method NAME scored on the odometry another estimator wrote for the same\n"
     "scenario and seed: BAG_PATTERN with {seed} replaced by the seed; its odometry/filtered is the\n"
     "slow motion (linearly interpolated to the samples) and its odometry/wave, if present, the\n"
@@ -68,6 +76,7 @@ std::optional<Options> parse(int argc, char** argv)
       .text("--calibration-scenario", &o.calibration_scenario)
       .integer("--seeds", &o.seeds)
       .number("--settle", &o.settle)
+      .number("--duration", &o.duration)
       .text("--markdown", &o.markdown)
       .text("--csv", &o.csv)
       .option("--estimate", [&o](const std::string& spec) {
@@ -82,6 +91,8 @@ std::optional<Options> parse(int argc, char** argv)
     throw pbc::UsageError("--scenario is required");
   if (o.seeds < 1)
     throw pbc::UsageError("--seeds must be >= 1");
+  if (o.duration < 0.0)
+    throw pbc::UsageError("--duration must be > 0");
   return o;
 }
 
@@ -98,8 +109,14 @@ std::vector<sim::Sample> simulate(const sim::Scenario& scenario, std::uint64_t s
 }
 
 /// Errors of one method on one run, per axis.
+/// Elapsed times at which the slow-motion error is reported (issue 5: 60 s, 10 min, 30 min) [s].
+constexpr std::array<double, 3> kCheckpoints = { 60.0, 600.0, 1800.0 };
+
 struct Errors
 {
+  /// |filtered - true slow| at each of kCheckpoints [m]; NaN where the run is shorter.
+  std::array<Vector3, kCheckpoints.size()> slow_at{ Vector3::Constant(NAN), Vector3::Constant(NAN),
+                                                    Vector3::Constant(NAN) };
   Vector3 slow_final = Vector3::Zero();   ///< |filtered - true slow| at the end [m]
   Vector3 total_final = Vector3::Zero();  ///< |filtered + wave - true position| at the end [m]
   Vector3 slow_rms = Vector3::Constant(NAN);   ///< RMS(filtered - true slow) after settling [m]
@@ -119,6 +136,14 @@ public:
 
   void add(const sim::Sample& s, const Vector3& slow, const Vector3& wave)
   {
+    // The first sample within 0.1 s before a checkpoint or after it (a 60 s run's last sample is
+    // one period short of 60 s).
+    for (std::size_t c = 0; c < kCheckpoints.size(); ++c)
+      if (!checkpoint_done_[c] && s.elapsed >= kCheckpoints[c] - 0.1)
+      {
+        checkpoint_done_[c] = true;
+        slow_at_[c] = (slow - (s.truth.slow_position - slow0_)).cwiseAbs();
+      }
     if (s.elapsed < settle_)
       return;
     const Vector3 e = wave - s.truth.wave_position;
@@ -136,6 +161,7 @@ public:
   Errors finish(const sim::Sample& last, const Vector3& slow, const Vector3& wave) const
   {
     Errors errors;
+    errors.slow_at = slow_at_;
     errors.slow_final = (slow - (last.truth.slow_position - slow0_)).cwiseAbs();
     errors.total_final = (slow + wave - (last.truth.position - slow0_)).cwiseAbs();
     for (int i = 0; i < 3; ++i)
@@ -162,22 +188,110 @@ private:
   Vector3 error2_ = Vector3::Zero(), truth2_ = Vector3::Zero(), slow2_ = Vector3::Zero(), total2_ = Vector3::Zero();
   Vector3 truth_sum_ = Vector3::Zero();
   int n_ = 0;
+  std::array<bool, kCheckpoints.size()> checkpoint_done_{};
+  std::array<Vector3, kCheckpoints.size()> slow_at_{ Vector3::Constant(NAN), Vector3::Constant(NAN),
+                                                     Vector3::Constant(NAN) };
 };
 
-Errors evaluate(const std::vector<sim::Sample>& samples, const pbc::CompensatorConfig& config,
-                const std::optional<Vector3>& bias, double settle)
+/// Period tracking of one run, per axis: the compensator's dominant frequency against the
+/// dominant frequency of the true wave acceleration over the same window (same FFT settings),
+/// compared at every FFT hop.
+struct PeriodErrors
+{
+  Vector3 lock_time = Vector3::Constant(NAN);       ///< elapsed time of the first lock [s]
+  Vector3 locked_percent = Vector3::Constant(NAN);  ///< hops locked after the first lock [%]
+  Vector3 error_median = Vector3::Constant(NAN);    ///< median |f - f_true| / f_true while locked [%]
+  Vector3 error_p95 = Vector3::Constant(NAN);       ///< 95th percentile of the same [%]
+};
+
+/// Value below which `share` of `values` lie (nearest rank); NaN for none.
+double percentile(std::vector<double> values, double share)
+{
+  if (values.empty())
+    return NAN;
+  const std::size_t k = std::min(values.size() - 1, static_cast<std::size_t>(share * values.size()));
+  std::nth_element(values.begin(), values.begin() + k, values.end());
+  return values[k];
+}
+
+class PeriodScorer
+{
+public:
+  PeriodScorer(const pbc::CompensatorConfig& config, double rate) : config_(config)
+  {
+    const int window = std::max(16, static_cast<int>(std::lround(config.fft_window * rate)));
+    for (auto& tracker : truth_)
+      tracker = std::make_unique<pbc::FrequencyTracker>(window, rate);
+    hop_ = std::max(1, static_cast<int>(std::lround(config.fft_hop * rate)));
+  }
+
+  void add(const sim::Sample& s, const pbc::CompensatorOutput& out)
+  {
+    for (int i = 0; i < 3; ++i)
+    {
+      truth_[i]->push(s.truth.wave_acceleration[i], s.t);
+      if (out.axes[i].locked && std::isnan(errors_.lock_time[i]))
+        errors_.lock_time[i] = s.elapsed;
+    }
+    if (++since_hop_ < hop_)
+      return;
+    since_hop_ = 0;
+    for (int i = 0; i < 3; ++i)
+    {
+      if (std::isnan(errors_.lock_time[i]))
+        continue;
+      ++hops_[i];
+      if (!out.axes[i].locked)
+        continue;
+      ++locked_[i];
+      const pbc::FrequencyEstimate truth = truth_[i]->analyse(config_.min_frequency, config_.max_frequency, 1.0);
+      if (truth.frequency > 0.0)
+        relative_[i].push_back(100.0 * std::abs(out.axes[i].frequency - truth.frequency) / truth.frequency);
+    }
+  }
+
+  PeriodErrors finish() const
+  {
+    PeriodErrors e = errors_;
+    for (int i = 0; i < 3; ++i)
+    {
+      if (hops_[i] > 0)
+        e.locked_percent[i] = 100.0 * locked_[i] / hops_[i];
+      e.error_median[i] = percentile(relative_[i], 0.5);
+      e.error_p95[i] = percentile(relative_[i], 0.95);
+    }
+    return e;
+  }
+
+private:
+  pbc::CompensatorConfig config_;
+  std::array<std::unique_ptr<pbc::FrequencyTracker>, 3> truth_;
+  int hop_ = 1, since_hop_ = 0;
+  std::array<int, 3> hops_{}, locked_{};
+  std::array<std::vector<double>, 3> relative_;
+  PeriodErrors errors_;
+};
+
+/// One method's errors; `period`, if given, receives the period tracking of the run.
+Errors evaluate(const std::vector<sim::Sample>& samples, double rate, const pbc::CompensatorConfig& config,
+                const std::optional<Vector3>& bias, double settle, PeriodErrors* period = nullptr)
 {
   pbc::Compensator compensator(config);
   if (bias && !compensator.setConstantBias(*bias))
     throw std::runtime_error("the calibration scenario's constant bias is not finite or beyond " +
                              std::to_string(pbc::kMaxConstantBias) + " m/s^2");
   Scorer scorer(samples.front(), settle);
+  PeriodScorer period_scorer(config, rate);
   pbc::CompensatorOutput out;
   for (const auto& s : samples)
   {
     compensator.addSample(sim::toImuSample(s), &out);
     scorer.add(s, out.position_filtered, out.position_wave);
+    if (period != nullptr)
+      period_scorer.add(s, out);
   }
+  if (period != nullptr)
+    *period = period_scorer.finish();
   return scorer.finish(samples.back(), out.position_filtered, out.position_wave);
 }
 
@@ -228,14 +342,17 @@ Errors highPassBaseline(const std::vector<sim::Sample>& samples, double gravity,
 /// Plain double integration of the level, gravity-free acceleration (no compensation).
 Errors integrateRaw(const std::vector<sim::Sample>& samples, double gravity)
 {
+  // Its position is slow and wave motion at once: scored at the checkpoints and the end only.
+  Scorer scorer(samples.front(), std::numeric_limits<double>::infinity());
   Vector3 v = Vector3::Zero(), p = Vector3::Zero();
   for (std::size_t k = 1; k < samples.size(); ++k)
   {
     const double dt = samples[k].stamp - samples[k - 1].stamp;
     v += (samples[k].orientation * samples[k].accel - Vector3(0, 0, gravity)) * dt;
     p += v * dt;
+    scorer.add(samples[k], p, Vector3::Zero());
   }
-  return Scorer(samples.front(), 0.0).finish(samples.back(), p, Vector3::Zero());
+  return scorer.finish(samples.back(), p, Vector3::Zero());
 }
 
 /// Positions of one odometry topic of a bag (recorded with or without a leading slash), in stamp order.
@@ -347,7 +464,9 @@ int main(int argc, char** argv)
   }
   try
   {
-    const sim::Scenario scenario = sim::loadScenario(options.scenario);
+    sim::Scenario scenario = sim::loadScenario(options.scenario);
+    if (options.duration > 0.0)
+      scenario.duration = options.duration;
     std::optional<Vector3> calibrated_bias;
     if (!options.calibration_scenario.empty())
     {
@@ -373,6 +492,7 @@ int main(int argc, char** argv)
     for (const auto& estimate : options.estimates)
       methods.push_back(estimate.first);
     std::map<std::string, std::vector<Errors>> results;
+    std::vector<PeriodErrors> periods;  // default mode, per seed
     for (int seed = 1; seed <= options.seeds; ++seed)
     {
       std::cerr << "\rseed " << seed << "/" << options.seeds << std::flush;
@@ -387,48 +507,75 @@ int main(int argc, char** argv)
       pbc::CompensatorConfig ours;
       results["raw"].push_back(integrateRaw(samples, pbc::kStandardGravity));
       results["highpass"].push_back(highPassBaseline(samples, pbc::kStandardGravity, options.settle));
-      results["constant"].push_back(evaluate(samples, constant, calibrated_bias, options.settle));
-      results["paper"].push_back(evaluate(samples, paper, calibrated_bias, options.settle));
-      results["default"].push_back(evaluate(samples, ours, std::nullopt, options.settle));
+      results["constant"].push_back(evaluate(samples, scenario.rate, constant, calibrated_bias, options.settle));
+      results["paper"].push_back(evaluate(samples, scenario.rate, paper, calibrated_bias, options.settle));
+      periods.emplace_back();
+      results["default"].push_back(evaluate(samples, scenario.rate, ours, std::nullopt, options.settle, &periods.back()));
       for (const auto& [name, pattern] : options.estimates)
         results[name].push_back(scoreEstimate(samples, seedPath(pattern, seed), options.settle));
     }
     std::cerr << "\n";
 
     std::ostringstream table;
-    table << "| method | axis | slow-motion error at end [m] | slow-motion RMS error [m] | total position error at end [m] "
-             "| total position RMS error [m] | wave RMS error [% of true wave RMS] | wave RMS error [% of Hs] "
-             "|\n|---|---|---|---|---|---|---|---|\n";
+    table << "| method | axis | slow-motion error at 60 s [m] | at 10 min [m] | at 30 min [m] | at end [m] "
+             "| slow-motion RMS error [m] | total position error at end [m] | total position RMS error [m] "
+             "| wave RMS error [% of true wave RMS] | wave RMS error [% of Hs] |\n"
+             "|---|---|---|---|---|---|---|---|---|---|---|\n";
     std::ofstream csv;
     if (!options.csv.empty())
     {
       csv.open(options.csv);
-      csv << "method,axis,seed,slow_final_m,slow_rms_m,total_final_m,total_rms_m,wave_rms_percent,wave_hs_percent\n";
+      csv << "method,axis,seed,slow_60s_m,slow_10min_m,slow_30min_m,slow_final_m,slow_rms_m,total_final_m,"
+             "total_rms_m,wave_rms_percent,wave_hs_percent\n";
     }
     const char* axes = "xyz";
     for (const auto& method : methods)
       for (int i = 0; i < 3; ++i)
       {
-        std::vector<double> slow, slow_rms, total, total_rms, wave, wave_hs;
+        // Columns in table order; each holds one value per seed.
+        std::array<std::vector<double>, 9> columns;
         for (std::size_t k = 0; k < results[method].size(); ++k)
         {
           const Errors& e = results[method][k];
-          slow.push_back(e.slow_final[i]);
-          slow_rms.push_back(e.slow_rms[i]);
-          total.push_back(e.total_final[i]);
-          total_rms.push_back(e.total_rms[i]);
-          wave.push_back(e.wave_rms_percent[i]);
-          wave_hs.push_back(e.wave_hs_percent[i]);
+          const std::array<double, 9> row = { e.slow_at[0][i],    e.slow_at[1][i],     e.slow_at[2][i],
+                                              e.slow_final[i],    e.slow_rms[i],       e.total_final[i],
+                                              e.total_rms[i],     e.wave_rms_percent[i], e.wave_hs_percent[i] };
           if (csv.is_open())
-            csv << method << "," << axes[i] << "," << k + 1 << "," << e.slow_final[i] << "," << e.slow_rms[i] << ","
-                << e.total_final[i] << "," << e.total_rms[i] << "," << e.wave_rms_percent[i] << ","
-                << e.wave_hs_percent[i] << "\n";
+            csv << method << "," << axes[i] << "," << k + 1;
+          for (std::size_t c = 0; c < row.size(); ++c)
+          {
+            columns[c].push_back(row[c]);
+            if (csv.is_open())
+              csv << "," << row[c];
+          }
+          if (csv.is_open())
+            csv << "\n";
         }
-        table << "| " << method << " | " << axes[i] << " | " << format(median(slow), "%.4f") << " | "
-              << format(median(slow_rms), "%.4f") << " | " << format(median(total), "%.4f") << " | "
-              << format(median(total_rms), "%.4f") << " | " << format(median(wave), "%.1f") << " | "
-              << format(median(wave_hs), "%.2f") << " |\n";
+        table << "| " << method << " | " << axes[i];
+        for (std::size_t c = 0; c < columns.size(); ++c)
+          table << " | " << format(median(columns[c]), c < 7 ? "%.4f" : (c == 7 ? "%.1f" : "%.2f"));
+        table << " |\n";
       }
+    // Period tracking of the default mode (the paper mode uses the same tracker).
+    table << "\nPeriod tracking (default mode), medians over seeds:\n\n"
+             "| axis | first lock [s] | FFT hops locked after it [%] | dominant-frequency error, median [%] "
+             "| 95th percentile [%] |\n|---|---|---|---|---|\n";
+    for (int i = 0; i < 3; ++i)
+    {
+      std::array<std::vector<double>, 4> columns;
+      int never = 0;
+      for (const PeriodErrors& p : periods)
+      {
+        never += std::isnan(p.lock_time[i]) ? 1 : 0;
+        const std::array<double, 4> row = { p.lock_time[i], p.locked_percent[i], p.error_median[i], p.error_p95[i] };
+        for (std::size_t c = 0; c < row.size(); ++c)
+          columns[c].push_back(row[c]);
+      }
+      table << "| " << axes[i] << " | " << format(median(columns[0]), "%.1f")
+            << (never > 0 ? " (never in " + std::to_string(never) + " of " + std::to_string(periods.size()) + ")" : "")
+            << " | " << format(median(columns[1]), "%.0f") << " | " << format(median(columns[2]), "%.2f") << " | "
+            << format(median(columns[3]), "%.2f") << " |\n";
+    }
     std::ostringstream heading;
     heading << "scenario " << scenario.name << ": " << scenario.rate << " Hz, " << scenario.duration
             << " s; medians over seeds 1.." << options.seeds << "; RMS errors from " << options.settle

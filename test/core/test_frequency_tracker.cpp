@@ -121,3 +121,17 @@ TEST(FrequencyTracker, DecimatedClearStartsAnew)
   ASSERT_TRUE(e.locked);
   EXPECT_NEAR(e.frequency, 0.2, 0.002);
 }
+
+TEST(FrequencyTracker, NoLockOnTheSkirtOfALineBelowTheBand)
+{
+  // 4 s of a 0.443 Hz line: the band starts at 3 periods of the data (0.75 Hz), where the Hann
+  // window's skirt of the line is still high. The edge bin must not pass for a peak (it did:
+  // a lock at 0.777 Hz in paper_bench, 3 s before the true one).
+  for (int decimation : { 1, 8 })
+  {
+    FrequencyTracker tracker(2631, 87.7, decimation);
+    for (int k = 0; k < 4 * 87.7; ++k)
+      tracker.push(0.05 * std::sin(2 * M_PI * 0.443 * k / 87.7), k / 87.7);
+    EXPECT_FALSE(tracker.analyse(0.05, 2.0, 30.0).locked) << "decimation " << decimation;
+  }
+}
