@@ -106,12 +106,168 @@ Parameters loadParameters(const Options& options)
   return params;
 }
 
+/// Little-endian u32 at p.
+std::uint32_t u32(const char* p)
+{
+  return static_cast<std::uint32_t>(static_cast<unsigned char>(p[0])) |
+         (static_cast<std::uint32_t>(static_cast<unsigned char>(p[1])) << 8) |
+         (static_cast<std::uint32_t>(static_cast<unsigned char>(p[2])) << 16) |
+         (static_cast<std::uint32_t>(static_cast<unsigned char>(p[3])) << 24);
+}
+
+/// The fields of a record header that the structure check uses (raw values; empty if absent).
+struct RecordFields
+{
+  std::string op, compression, conn, count, ver, size;
+};
+
+constexpr char kOpMessage = '\x02', kOpIndexData = '\x04', kOpChunk = '\x05', kOpConnection = '\x07';
+
+/// Checks that every field of a record header lies inside it and picks out RecordFields.
+/// @return an empty string, or what is wrong
+std::string checkHeader(const std::string& header, std::uint64_t where, RecordFields* fields)
+{
+  std::size_t offset = 0;
+  while (offset < header.size())
+  {
+    if (header.size() - offset < 4)
+    {
+      return "record header at byte " + std::to_string(where) + " ends inside a field length";
+    }
+    const std::uint32_t length = u32(header.data() + offset);
+    offset += 4;
+    if (length > header.size() - offset)
+    {
+      return "record header at byte " + std::to_string(where) + " has a field of " + std::to_string(length) +
+             " bytes in a header of " + std::to_string(header.size());
+    }
+    const std::string field = header.substr(offset, length);
+    offset += length;
+    const std::size_t equals = field.find('=');
+    const std::string name = field.substr(0, equals), value = equals == std::string::npos ? "" : field.substr(equals + 1);
+    for (auto [key, target] : { std::pair{ "op", &fields->op }, { "compression", &fields->compression },
+                                { "conn", &fields->conn }, { "count", &fields->count }, { "ver", &fields->ver },
+                                { "size", &fields->size } })
+    {
+      if (name == key)
+      {
+        *target = value;
+      }
+    }
+  }
+  return std::string();
+}
+
+/// One record at `offset` of `data` (a chunk read into memory): header and data inside `data`.
+/// On success sets *fields, *data_begin, *next (offset of the following record).
+std::string checkRecord(const std::string& data, std::size_t offset, std::uint64_t base, RecordFields* fields,
+                        std::size_t* data_begin, std::size_t* next)
+{
+  const std::uint32_t header_length = u32(data.data() + offset);
+  if (header_length > data.size() - offset - 4)
+  {
+    return "record at byte " + std::to_string(base + offset) + " inside a chunk runs past the chunk";
+  }
+  const std::string why = checkHeader(data.substr(offset + 4, header_length), base + offset, fields);
+  if (!why.empty())
+  {
+    return why;
+  }
+  std::size_t position = offset + 4 + header_length;
+  if (data.size() - position < 4)
+  {
+    return "record at byte " + std::to_string(base + position) + " inside a chunk has no data length";
+  }
+  const std::uint32_t data_length = u32(data.data() + position);
+  position += 4;
+  if (data_length > data.size() - position)
+  {
+    return "record data at byte " + std::to_string(base + position) + " inside a chunk runs past the chunk";
+  }
+  *data_begin = position;
+  *next = position + data_length;
+  return std::string();
+}
+
+/// What the index records after a chunk may point at.
+struct ChunkLayout
+{
+  bool present = false;
+  bool walked = false;               ///< uncompressed: every record start is known
+  std::uint64_t uncompressed_size = 0;
+  std::map<std::uint32_t, std::string> messages;  ///< offset of each message record -> its conn
+};
+
+/// The records of an uncompressed chunk; connection records' data is a header too.
+std::string walkChunk(const std::string& data, std::uint64_t base, ChunkLayout* layout)
+{
+  std::size_t offset = 0;
+  while (data.size() - offset >= 4)
+  {
+    RecordFields fields;
+    std::size_t data_begin = 0, next = 0;
+    std::string why = checkRecord(data, offset, base, &fields, &data_begin, &next);
+    if (why.empty() && fields.op == std::string(1, kOpConnection))
+    {
+      RecordFields unused;
+      why = checkHeader(data.substr(data_begin, next - data_begin), base + data_begin, &unused);
+    }
+    if (!why.empty())
+    {
+      return why;
+    }
+    if (fields.op == std::string(1, kOpMessage))
+    {
+      layout->messages[static_cast<std::uint32_t>(offset)] = fields.conn;
+    }
+    offset = next;
+  }
+  return offset == data.size() ? std::string() : "chunk ends inside a record length";
+}
+
+/// An index data record (version 1: count entries of time and offset into the chunk before it).
+/// rosbag reads a message at each offset without checking it (readHeaderFromBuffer; finding F10).
+std::string checkIndex(const RecordFields& fields, const std::string& data, std::uint64_t where,
+                       const ChunkLayout& chunk)
+{
+  const std::string at = "index record at byte " + std::to_string(where);
+  if (fields.ver.size() != 4 || u32(fields.ver.data()) != 1 || fields.count.size() != 4 || fields.conn.size() != 4)
+  {
+    return at + " is not a version 1 index with a count and a connection";
+  }
+  const std::uint64_t count = u32(fields.count.data());
+  if (data.size() != 12 * count)
+  {
+    return at + " holds " + std::to_string(data.size()) + " bytes for " + std::to_string(count) + " entries";
+  }
+  if (!chunk.present)
+  {
+    return at + " follows no chunk";
+  }
+  for (std::uint64_t i = 0; i < count; ++i)
+  {
+    const std::uint32_t offset = u32(data.data() + 12 * i + 8);
+    const auto message = chunk.messages.find(offset);
+    const bool points_at_message = chunk.walked ? message != chunk.messages.end() && message->second == fields.conn :
+                                                  offset + 8ULL <= chunk.uncompressed_size;
+    if (!points_at_message)
+    {
+      return at + ": entry " + std::to_string(i) + " points at offset " + std::to_string(offset) +
+             (chunk.walked ? ", where the chunk has no message of that connection" :
+                             ", beyond the chunk's " + std::to_string(chunk.uncompressed_size) + " bytes");
+    }
+  }
+  return std::string();
+}
+
 /// Walks the record structure of a bag (format 2.0) before rosbag reads it: every field of
 /// every record header that is present must lie inside its header, also for the records inside
-/// uncompressed chunks. rosbag (ros::Header::parse) trusts those lengths and reads past its
-/// buffer on a corrupt one (found by test/fuzz/fuzz_bag.cpp; docs/reliability.md F7). A record
-/// cut off by the end of the file (a bag that ends mid-chunk) is reported here too: rosbag would
-/// first allocate the length it claims.
+/// uncompressed chunks, and every index entry must point at a message of its connection in the
+/// chunk before it (inside a compressed chunk's size: its records are not walked). rosbag
+/// (ros::Header::parse, Bag::readHeaderFromBuffer) trusts those lengths and offsets and reads
+/// past its buffer on a corrupt one (found by test/fuzz/fuzz_bag.cpp; docs/reliability.md F7,
+/// F10). A record cut off by the end of the file (a bag that ends mid-chunk) is reported here
+/// too: rosbag would first allocate the length it claims.
 /// @return an empty string, or what is wrong and where
 std::string checkBagStructure(const std::string& path)
 {
@@ -131,85 +287,8 @@ std::string checkBagStructure(const std::string& path)
   }
   file.seekg(0, std::ios::end);
   const std::uint64_t size = static_cast<std::uint64_t>(file.tellg());
-  auto u32 = [](const char* p) {
-    return static_cast<std::uint32_t>(static_cast<unsigned char>(p[0])) |
-           (static_cast<std::uint32_t>(static_cast<unsigned char>(p[1])) << 8) |
-           (static_cast<std::uint32_t>(static_cast<unsigned char>(p[2])) << 16) |
-           (static_cast<std::uint32_t>(static_cast<unsigned char>(p[3])) << 24);
-  };
-  // Checks one header; fills op and compression. Empty string when sound.
-  auto checkHeader = [&u32](const std::string& header, std::uint64_t where, std::string* op, std::string* compression) {
-    std::size_t offset = 0;
-    while (offset < header.size())
-    {
-      if (header.size() - offset < 4)
-      {
-        return "record header at byte " + std::to_string(where) + " ends inside a field length";
-      }
-      const std::uint32_t length = u32(header.data() + offset);
-      offset += 4;
-      if (length > header.size() - offset)
-      {
-        return "record header at byte " + std::to_string(where) + " has a field of " + std::to_string(length) +
-               " bytes in a header of " + std::to_string(header.size());
-      }
-      const std::string field = header.substr(offset, length);
-      offset += length;
-      if (field.rfind("op=", 0) == 0)
-      {
-        *op = field.substr(3);
-      }
-      else if (field.rfind("compression=", 0) == 0)
-      {
-        *compression = field.substr(12);
-      }
-    }
-    return std::string();
-  };
-  // Walks the records of [begin, end) of a buffer (an uncompressed chunk).
-  auto walkBuffer = [&](const std::string& data, std::uint64_t base) -> std::string {
-    std::size_t offset = 0;
-    while (data.size() - offset >= 4)
-    {
-      const std::uint32_t header_length = u32(data.data() + offset);
-      if (header_length > data.size() - offset - 4)
-      {
-        return "record at byte " + std::to_string(base + offset) + " inside a chunk runs past the chunk";
-      }
-      std::string op, compression;
-      const std::string why = checkHeader(data.substr(offset + 4, header_length), base + offset, &op, &compression);
-      if (!why.empty())
-      {
-        return why;
-      }
-      offset += 4 + header_length;
-      if (data.size() - offset < 4)
-      {
-        return "record at byte " + std::to_string(base + offset) + " inside a chunk has no data length";
-      }
-      const std::uint32_t data_length = u32(data.data() + offset);
-      offset += 4;
-      if (data_length > data.size() - offset)
-      {
-        return "record data at byte " + std::to_string(base + offset) + " inside a chunk runs past the chunk";
-      }
-      if (op == std::string(1, '\x07'))
-      {
-        // A connection record's data is itself a header (topic, type, md5sum, definition).
-        std::string unused_op, unused_compression;
-        const std::string connection =
-            checkHeader(data.substr(offset, data_length), base + offset, &unused_op, &unused_compression);
-        if (!connection.empty())
-        {
-          return connection;
-        }
-      }
-      offset += data_length;
-    }
-    return offset == data.size() ? std::string() : "chunk ends inside a record length";
-  };
   std::uint64_t position = kMagic.size();
-  file.seekg(static_cast<std::streamoff>(position));
+  ChunkLayout chunk;
   char length[4];
   while (position + 4 <= size)
   {
@@ -225,12 +304,13 @@ std::string checkBagStructure(const std::string& path)
     }
     std::string header(header_length, '\0');
     file.read(&header[0], header_length);
-    std::string op, compression;
-    const std::string why = checkHeader(header, position, &op, &compression);
+    RecordFields fields;
+    std::string why = checkHeader(header, position, &fields);
     if (!why.empty())
     {
       return why;
     }
+    const std::uint64_t record = position;
     position += 4 + header_length;
     if (position + 4 > size)
     {
@@ -244,27 +324,38 @@ std::string checkBagStructure(const std::string& path)
       return "record data at byte " + std::to_string(position) + " declares " + std::to_string(data_length) +
              " bytes but the file ends " + std::to_string(size - position) + " bytes later";
     }
-    if (op == std::string(1, '\x07'))
+    const char op = fields.op.size() == 1 ? fields.op[0] : '\0';
+    const bool walk_chunk = op == kOpChunk && fields.compression == "none";
+    std::string data;
+    if (op == kOpConnection || op == kOpIndexData || walk_chunk)
+    {
+      data.resize(data_length);
+      file.read(&data[0], data_length);
+    }
+    if (op == kOpConnection)
     {
       // A connection record's data is itself a header (topic, type, md5sum, definition).
-      std::string data(data_length, '\0');
-      file.read(&data[0], data_length);
-      std::string unused_op, unused_compression;
-      const std::string connection = checkHeader(data, position, &unused_op, &unused_compression);
-      if (!connection.empty())
+      RecordFields unused;
+      why = checkHeader(data, position, &unused);
+    }
+    else if (op == kOpChunk)
+    {
+      chunk = ChunkLayout();
+      chunk.present = true;
+      chunk.walked = walk_chunk;
+      chunk.uncompressed_size = fields.size.size() == 4 ? u32(fields.size.data()) : 0;
+      if (walk_chunk)
       {
-        return connection;
+        why = walkChunk(data, position, &chunk);
       }
     }
-    if (op == std::string(1, '\x05') && compression == "none")
+    else if (op == kOpIndexData)
     {
-      std::string data(data_length, '\0');
-      file.read(&data[0], data_length);
-      const std::string inner = walkBuffer(data, position);
-      if (!inner.empty())
-      {
-        return inner;
-      }
+      why = checkIndex(fields, data, record, chunk);
+    }
+    if (!why.empty())
+    {
+      return why;
     }
     position += data_length;
   }
