@@ -30,6 +30,7 @@
 
 #include "periodic_bias_compensation/core/calibration_file.h"
 #include "periodic_bias_compensation/core/compensator.h"
+#include "periodic_bias_compensation/core/gain_tuning.h"
 #include "periodic_bias_compensation/ros/conversions.h"
 #include "periodic_bias_compensation/ros/parameters.h"
 #include "periodic_bias_compensation/tools/command_line.h"
@@ -41,10 +42,13 @@ namespace
 {
 const char* const kUsage =
     "usage: compensate_bag --in IN.bag --out OUT.bag [--mode paper|default] [--params FILE.yaml]\n"
-    "                      [--imu-topic imu/data]\n"
+    "                      [--imu-topic imu/data] [--tune-gains GAINS.yaml]\n"
     "Runs the bias compensator over IN.bag and writes odometry/filtered, odometry/wave and\n"
     "bias_state (plus ground_truth/* copied through) to OUT.bag. --params takes a YAML file with\n"
-    "the keys of config/compensator.yaml; --mode overrides its 'mode'.\n";
+    "the keys of config/compensator.yaml; --mode overrides its 'mode'.\n"
+    "--tune-gains also tunes paper mode's alpha/beta on IN.bag, which must be recorded while the\n"
+    "vessel holds its station (moored, at anchor, on a bench: its slow motion is taken as zero),\n"
+    "and writes them to GAINS.yaml as parameters (give it to --params or the node's rosparams).\n";
 
 struct Options
 {
@@ -53,6 +57,7 @@ struct Options
   std::string mode;
   std::string params;
   std::string imu_topic = "imu/data";
+  std::string tune_gains;
 };
 
 /// The options, or nothing after --help. A wrong command line throws UsageError (exit status 2).
@@ -64,7 +69,8 @@ std::optional<Options> parseArguments(int argc, char** argv)
       .text("--out", &options.out)
       .text("--mode", &options.mode)
       .text("--params", &options.params)
-      .text("--imu-topic", &options.imu_topic);
+      .text("--imu-topic", &options.imu_topic)
+      .text("--tune-gains", &options.tune_gains);
   if (!cli.parse(argc, argv))
     return std::nullopt;
   if (options.in.empty() || options.out.empty())
@@ -394,6 +400,7 @@ public:
       {
         throw std::runtime_error("parameter 'calibration_file': '" + file + "' holds a non-finite constant bias");
       }
+      loaded_bias_ = bias;
     }
     else if (!file.empty())
     {
@@ -492,6 +499,53 @@ public:
     in.close();
   }
 
+  /// --tune-gains: paper mode's gains tuned on the samples of this bag (tunePaperGains), written
+  /// as parameters to options_.tune_gains. Nothing is written on error.
+  void tuneGains() const
+  {
+    if (tuning_samples_.size() < 2)
+    {
+      throw std::runtime_error("--tune-gains: the bag has fewer than 2 usable IMU samples");
+    }
+    CompensatorConfig base = params_.core;
+    base.mode = Mode::kPaper;
+    // Scored once the calibration window is over and the loop has had 10 s to settle.
+    const double settle = base.calibration_duration + 10.0;
+    if (tuning_samples_.back().t - tuning_samples_.front().t < settle + 30.0)
+    {
+      throw std::runtime_error("--tune-gains: the bag is too short to tune on (needs " +
+                               std::to_string(static_cast<int>(settle + 30.0)) + " s of IMU data)");
+    }
+    auto last_report = std::chrono::steady_clock::now();
+    const GainTuningResult tuning =
+        tunePaperGains(tuning_samples_, base, loaded_bias_, settle, {}, 2, [&](int done, int total) {
+          const auto now = std::chrono::steady_clock::now();
+          if (done == total || now - last_report > std::chrono::seconds(2))
+          {
+            last_report = now;
+            std::fprintf(stderr, "compensate_bag: tuning gains, run %d of %d\n", done, total);
+          }
+        });
+    char summary[256];
+    std::snprintf(summary, sizeof summary,
+                  "paper-mode gains tuned by compensate_bag on %s; RMS of the slow motion after %.0f s "
+                  "[m, x y z]: %.4f %.4f %.4f with the gains given, %.4f %.4f %.4f with these",
+                  options_.in.c_str(), settle, tuning.score_start[0], tuning.score_start[1], tuning.score_start[2],
+                  tuning.score[0], tuning.score[1], tuning.score[2]);
+    const std::string temp = options_.tune_gains + ".partial-" + std::to_string(::getpid());
+    {
+      std::ofstream file(temp);
+      file << gainsToYaml(tuning.gains, summary) << "mode: paper\n";
+      if (!file.flush())
+      {
+        fs::remove(temp);
+        throw std::runtime_error("cannot write " + options_.tune_gains);
+      }
+    }
+    fs::rename(temp, options_.tune_gains);
+    std::fprintf(stderr, "compensate_bag: %s\ncompensate_bag: wrote %s\n", summary, options_.tune_gains.c_str());
+  }
+
   void printSummary() const
   {
     const CompensatorCounters& c = compensator_.counters();
@@ -524,6 +578,10 @@ private:
       ++out_of_range_;
       return;
     }
+    if (!options_.tune_gains.empty())
+    {
+      tuning_samples_.push_back(sample);
+    }
     CompensatorOutput result;
     const SampleStatus status = compensator_.addSample(sample, &result);
     if (status != SampleStatus::kAccepted && status != SampleStatus::kGapReset &&
@@ -549,6 +607,8 @@ private:
   const Options& options_;
   const Parameters& params_;
   Compensator compensator_;
+  std::optional<Vector3> loaded_bias_;       ///< from calibration_file, if one was loaded
+  std::vector<ImuSample> tuning_samples_;    ///< the samples given to the core, kept for --tune-gains
   FrameFilter frame_filter_;
   Mounting mounting_;
   std::uint64_t received_ = 0;
@@ -570,6 +630,11 @@ void checkPaths(const Options& options)
   if (in == out || (fs::exists(options.out, ec) && fs::equivalent(options.in, options.out, ec)))
   {
     throw std::runtime_error("--out must differ from --in ('" + options.in + "' would be overwritten)");
+  }
+  if (!options.tune_gains.empty() &&
+      (fs::weakly_canonical(options.tune_gains, ec) == in || fs::weakly_canonical(options.tune_gains, ec) == out))
+  {
+    throw std::runtime_error("--tune-gains must differ from --in and --out");
   }
   const fs::path dir = out.parent_path();
   if (!dir.empty() && !fs::is_directory(dir, ec))
@@ -596,6 +661,10 @@ int compensateBagMain(int argc, char** argv)
     BagCompensator compensator(options, params);
     temp_path = options.out + ".partial-" + std::to_string(::getpid());
     compensator.run(temp_path);
+    if (!options.tune_gains.empty())
+    {
+      compensator.tuneGains();
+    }
     fs::rename(temp_path, options.out);
     temp_path.clear();
     compensator.printSummary();

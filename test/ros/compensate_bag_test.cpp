@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <iterator>
 #include <map>
 #include <string>
 
@@ -150,6 +151,39 @@ TEST_F(CompensateBag, ModeAndParameterFile)
     ++n;
   }
   EXPECT_GT(n, 0u);
+}
+
+TEST_F(CompensateBag, TunedGainsFileLoadsAsParameters)
+{
+  const std::string out = dir_ + "/out.bag";
+  const std::string gains = dir_ + "/gains.yaml";
+  const CommandResult r = run(std::string("--in ") + PBC_BENCH_BAG + " --out " + out + " --tune-gains " + gains);
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("RMS of the slow motion"), std::string::npos) << r.output;
+  std::ifstream file(gains);
+  const std::string yaml((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
+  for (const char* key : { "alpha_v_x", "beta_p_z", "mode: paper" })
+  {
+    EXPECT_NE(yaml.find(key), std::string::npos) << key << " missing from\n" << yaml;
+  }
+
+  // The file is a parameter file: compensate_bag runs in paper mode with it.
+  const std::string paper = dir_ + "/paper.bag";
+  const CommandResult again = run(std::string("--in ") + PBC_BENCH_BAG + " --out " + paper + " --params " + gains);
+  ASSERT_EQ(again.status, 0) << again.output;
+  rosbag::Bag bag(paper, rosbag::bagmode::Read);
+  rosbag::View view(bag, rosbag::TopicQuery("/bias_state"));
+  ASSERT_NE(view.begin(), view.end());
+  EXPECT_EQ(view.begin()->instantiate<periodic_bias_compensation::BiasState>()->mode, "paper");
+}
+
+TEST_F(CompensateBag, TuneGainsRefusesToOverwriteTheOutput)
+{
+  const std::string out = dir_ + "/out.bag";
+  const CommandResult r = run(std::string("--in ") + PBC_BENCH_BAG + " --out " + out + " --tune-gains " + out);
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.output.find("--tune-gains must differ"), std::string::npos) << r.output;
+  expectNothingWritten(out);
 }
 
 TEST_F(CompensateBag, MissingInputFails)
