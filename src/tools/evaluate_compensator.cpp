@@ -499,6 +499,7 @@ int main(int argc, char** argv)
     paper.mode = pbc::Mode::kPaper;
     paper.assume_static_calibration = true;
     pbc::CompensatorConfig tuned = paper;
+    std::string tuning_note;
     {
       std::vector<pbc::ImuSample> training;
       for (const auto& s : simulate(scenario, kTrainingSeed))
@@ -508,13 +509,16 @@ int main(int argc, char** argv)
             std::cerr << "\rtuning paper gains on seed " << kTrainingSeed << ": run " << done << "/" << total << std::flush;
           });
       tuned.gains = tuning.gains;
-      std::cerr << "\n" << pbc::gainsToYaml(tuning.gains, "tuned gains; slow-motion RMS on the training run [m]: " +
-                                                              format(tuning.score_start[0], "%.4f") + " " +
-                                                              format(tuning.score_start[1], "%.4f") + " " +
-                                                              format(tuning.score_start[2], "%.4f") + " -> " +
-                                                              format(tuning.score[0], "%.4f") + " " +
-                                                              format(tuning.score[1], "%.4f") + " " +
-                                                              format(tuning.score[2], "%.4f"));
+      std::ostringstream note;
+      note << "\n`paper tuned`: gains tuned on seed " << kTrainingSeed << " (slow-motion RMS there, x y z: ";
+      for (int i = 0; i < 3; ++i)
+        note << format(tuning.score_start[i], "%.4f") << " -> " << format(tuning.score[i], "%.4f") << (i < 2 ? ", " : " m");
+      note << "); alpha_v beta_v alpha_p beta_p per axis:";
+      for (int i = 0; i < 3; ++i)
+        note << " " << "xyz"[i] << " " << tuning.gains[i].alpha_v << " " << tuning.gains[i].beta_v << " "
+             << tuning.gains[i].alpha_p << " " << tuning.gains[i].beta_p << (i < 2 ? ";" : "\n");
+      tuning_note = note.str();
+      std::cerr << "\n" << tuning_note;
     }
 
     std::vector<std::string> methods = { "raw", "highpass", "constant", "paper", "paper tuned", "default" };
@@ -583,6 +587,7 @@ int main(int argc, char** argv)
           table << " | " << format(median(columns[c]), c < 7 ? "%.4f" : (c == 7 ? "%.1f" : "%.2f"));
         table << " |\n";
       }
+    table << tuning_note;
     // Period tracking of the default mode (the paper mode uses the same tracker).
     table << "\nPeriod tracking (default mode), medians over seeds:\n\n"
              "| axis | first lock [s] | FFT hops locked after it [%] | dominant-frequency error, median [%] "
