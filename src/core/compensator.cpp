@@ -838,8 +838,16 @@ private:
 
   void updateFrequency(AxisEstimator& axis)
   {
-    const FrequencyEstimate estimate =
-        axis.tracker->analyse(config_.min_frequency, std::min(config_.max_frequency, 0.45 * rate_), config_.min_peak_ratio);
+    const double f_max = std::min(config_.max_frequency, 0.45 * rate_);
+    // The whole window finds long periods (a swell); a period that also fits three times in the
+    // newest kRecentFftWindow seconds is taken from those: a drifting encounter frequency is followed
+    // with less lag.
+    int span_samples = 0;
+    const FrequencyEstimate estimate = axis.tracker->analyseFreshest(
+        config_.min_frequency, f_max, config_.min_peak_ratio, static_cast<int>(kRecentFftWindow * rate_), &span_samples);
+    const double span = span_samples / rate_;
+    // Only estimates over a span that no longer grows go into the drift regression.
+    const bool whole_span = axis.tracker->full() || span_samples < axis.tracker->samples();
     if (!estimate.locked)
     {
       // A window shorter than three periods of a held lock (seeded at the end of calibration)
@@ -857,11 +865,11 @@ private:
     }
     axis.locked = true;
     axis.frequency = estimate.frequency;
-    axis.frequency_time = now_ - 0.5 * axis.tracker->samples() / rate_;
+    axis.frequency_time = now_ - 0.5 * span;
     // Only full windows: while it fills, the interpolation bias changes with the data length and
     // would read as a drift.
     auto& history = axis.frequency_history;
-    if (!axis.tracker->full())
+    if (!whole_span)
       history.clear();
     else
       history.emplace_back(axis.frequency_time, axis.frequency);
@@ -893,7 +901,7 @@ private:
         double sse = 0.0;
         for (const auto& [t, f] : history)
           sse += std::pow(f - mf - slope * (t - mt), 2);
-        const double overlap = std::sqrt(config_.fft_window / config_.fft_hop);
+        const double overlap = std::sqrt(span / config_.fft_hop);
         const double standard_error = overlap * std::sqrt(sse / (history.size() - 2) / stt);
         if (std::abs(slope) > 3.0 * standard_error)
           axis.frequency_slope = std::clamp(slope, -kMaxFrequencySlope, kMaxFrequencySlope);

@@ -150,10 +150,12 @@ int FrequencyTracker::samples() const
   return static_cast<int>(std::min<long>(count_, n_)) * decimation_;
 }
 
-FrequencyEstimate FrequencyTracker::analyse(double f_min, double f_max, double min_peak_ratio)
+FrequencyEstimate FrequencyTracker::analyse(double f_min, double f_max, double min_peak_ratio, int recent_samples)
 {
   FrequencyEstimate estimate;
-  const int available = static_cast<int>(std::min<long>(count_, n_));
+  int available = static_cast<int>(std::min<long>(count_, n_));
+  if (recent_samples > 0)
+    available = std::min(available, recent_samples / decimation_);
   if (available < 16)
     return estimate;
 
@@ -259,6 +261,24 @@ FrequencyEstimate FrequencyTracker::analyse(double f_min, double f_max, double m
                              plan_->power[k_peak] >= plan_->power[k_peak + 1];
   estimate.locked = local_maximum && estimate.peak_ratio >= min_peak_ratio && estimate.frequency >= f_lo &&
                     estimate.frequency <= f_max;
+  return estimate;
+}
+
+FrequencyEstimate FrequencyTracker::analyseFreshest(double f_min, double f_max, double min_peak_ratio,
+                                                    int recent_samples, int* span_samples)
+{
+  FrequencyEstimate estimate = analyse(f_min, f_max, min_peak_ratio);
+  *span_samples = samples();
+  const double recent_span = static_cast<double>(recent_samples) / sampleRate();
+  if (estimate.locked && samples() > recent_samples && estimate.frequency >= 3.0 / recent_span)
+  {
+    const FrequencyEstimate fresh = analyse(f_min, f_max, min_peak_ratio, recent_samples);
+    if (fresh.locked && std::abs(fresh.frequency - estimate.frequency) <= 0.2 * estimate.frequency)
+    {
+      estimate = fresh;
+      *span_samples = recent_samples / decimation_ * decimation_;
+    }
+  }
   return estimate;
 }
 

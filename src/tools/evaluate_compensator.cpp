@@ -227,6 +227,7 @@ public:
     for (auto& tracker : truth_)
       tracker = std::make_unique<pbc::FrequencyTracker>(window, rate);
     hop_ = std::max(1, static_cast<int>(std::lround(config.fft_hop * rate)));
+    rate_ = rate;
   }
 
   void add(const sim::Sample& s, const pbc::CompensatorOutput& out)
@@ -248,7 +249,10 @@ public:
       if (!out.axes[i].locked)
         continue;
       ++locked_[i];
-      const pbc::FrequencyEstimate truth = truth_[i]->analyse(config_.min_frequency, config_.max_frequency, 1.0);
+      // Over the same span the compensator used (analyseFreshest, same rule).
+      int span = 0;
+      const pbc::FrequencyEstimate truth = truth_[i]->analyseFreshest(
+          config_.min_frequency, config_.max_frequency, 1.0, static_cast<int>(pbc::kRecentFftWindow * rate_), &span);
       if (truth.frequency > 0.0)
         relative_[i].push_back(100.0 * std::abs(out.axes[i].frequency - truth.frequency) / truth.frequency);
     }
@@ -271,6 +275,7 @@ private:
   pbc::CompensatorConfig config_;
   std::array<std::unique_ptr<pbc::FrequencyTracker>, 3> truth_;
   int hop_ = 1, since_hop_ = 0;
+  double rate_ = 0.0;
   std::array<int, 3> hops_{}, locked_{};
   std::array<std::vector<double>, 3> relative_;
   PeriodErrors errors_;

@@ -66,13 +66,13 @@ void compensate(benchmark::State& state, const std::string& scenario, pbc::Mode 
   state.SetItemsProcessed(state.iterations() * data.size());
 }
 
-/// One FFT analysis of a full 30 s window of 100 Hz data (the cost paid every fft_hop per axis),
-/// decimated by the argument: 1 (the whole 3000 samples) or 10 (what the compensator does at
-/// 100 Hz with max_frequency 2 Hz: 300 samples).
+/// One FFT analysis of a full 60 s window (the default fft_window) of 100 Hz data (the cost paid
+/// every fft_hop per axis), decimated by the argument: 1 (the whole 6000 samples) or 10 (what the
+/// compensator does at 100 Hz with max_frequency 2 Hz: 600 samples).
 void fftAnalysis(benchmark::State& state)
 {
-  pbc::FrequencyTracker tracker(3000, 100.0, static_cast<int>(state.range(0)));
-  for (int k = 0; k < 3000; ++k)
+  pbc::FrequencyTracker tracker(6000, 100.0, static_cast<int>(state.range(0)));
+  for (int k = 0; k < 6000; ++k)
     tracker.push(std::sin(0.03 * k) + 0.01 * (k % 7), k / 100.0);
   for (auto _ : state)
     benchmark::DoNotOptimize(tracker.analyse(0.05, 2.0, 30.0).frequency);

@@ -135,3 +135,33 @@ TEST(FrequencyTracker, NoLockOnTheSkirtOfALineBelowTheBand)
     EXPECT_FALSE(tracker.analyse(0.05, 2.0, 30.0).locked) << "decimation " << decimation;
   }
 }
+
+TEST(FrequencyTracker, FreshestSpanFindsASwellAndFollowsADrift)
+{
+  // A 14 s swell under a shorter sea: it fits three times only in a 60 s window (a 30 s window
+  // searches periods up to 10 s), so analyseFreshest keeps the whole window for it.
+  const double rate = 50.0;
+  FrequencyTracker tracker(static_cast<int>(60.0 * rate), rate, 5);
+  for (int k = 0; k < 70 * rate; ++k)
+    tracker.push(0.3 * std::sin(2 * M_PI * k / (14.0 * rate)) + 0.1 * std::sin(2 * M_PI * 0.3 * k / rate), k / rate);
+  int span = 0;
+  FrequencyEstimate e = tracker.analyseFreshest(0.05, 2.0, 30.0, static_cast<int>(30.0 * rate), &span);
+  ASSERT_TRUE(e.locked);
+  EXPECT_NEAR(e.frequency, 1.0 / 14.0, 0.003);
+  EXPECT_EQ(span, static_cast<int>(60.0 * rate));
+
+  // A line whose frequency rose from 0.40 to 0.47 Hz over the last 70 s: the newest 30 s are
+  // centred 15 s back (0.455 Hz), the whole window 30 s back (0.44 Hz).
+  tracker.clear();
+  double phase = 0.0;
+  for (int k = 0; k < 70 * rate; ++k)
+  {
+    phase += 2 * M_PI * (0.40 + 0.001 * k / rate) / rate;
+    tracker.push(std::sin(phase), k / rate);
+  }
+  e = tracker.analyseFreshest(0.05, 2.0, 30.0, static_cast<int>(30.0 * rate), &span);
+  ASSERT_TRUE(e.locked);
+  EXPECT_EQ(span, static_cast<int>(30.0 * rate));
+  EXPECT_NEAR(e.frequency, 0.455, 0.004);
+  EXPECT_NEAR(tracker.analyse(0.05, 2.0, 30.0).frequency, 0.44, 0.004);
+}

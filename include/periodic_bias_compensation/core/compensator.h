@@ -37,6 +37,9 @@ constexpr double kMaxConstantBias = 50.0;
 /// = 10.4 diverges); from 6 samples on it stays bounded for every accepted gain (scanned,
 /// test_bad_input: PaperModeShortPeriod...).
 constexpr int kMinPaperPeriod = 6;
+/// Newest part of the FFT window analysed again for a period that fits three times in it
+/// (FrequencyTracker::analyseFreshest) [s].
+constexpr double kRecentFftWindow = 30.0;
 
 /// How the periodic drift terms d_v, d_p are computed.
 enum class Mode
@@ -71,7 +74,7 @@ struct CompensatorConfig
   double calibration_duration = 10.0;  ///< constant-bias window at start [s]
   bool assume_static_calibration = false;  ///< window is at rest (paper Sec. 3.1); else motion allowed
 
-  double fft_window = 30.0;      ///< FFT window length [s]
+  double fft_window = 60.0;      ///< FFT window length [s]
   double fft_hop = 1.0;          ///< time between FFT updates [s]
   double min_frequency = 0.05;   ///< lowest dominant frequency searched [Hz]
   double max_frequency = 2.0;    ///< highest dominant frequency searched [Hz]

@@ -50,8 +50,15 @@ public:
 
   /// Dominant frequency in [f_min, f_max] [Hz] (DC excluded, Hann window, mean removed,
   /// Gaussian interpolation of the peak between bins). Not locked when the window is not
-  /// full or no peak reaches min_peak_ratio.
-  FrequencyEstimate analyse(double f_min, double f_max, double min_peak_ratio);
+  /// full or no peak reaches min_peak_ratio. With recent_samples > 0 only the newest
+  /// recent_samples input samples are analysed (a fresher estimate of a period that fits in them).
+  FrequencyEstimate analyse(double f_min, double f_max, double min_peak_ratio, int recent_samples = 0);
+  /// analyse() of the whole window (long periods, a swell, need it); then, when the peak found
+  /// also fits three times in the newest recent_samples and is found there too (within 20 %), the
+  /// estimate from those instead: its span is centred less far back, so a drifting frequency is
+  /// followed with less lag. *span_samples: the input samples the returned estimate covers.
+  FrequencyEstimate analyseFreshest(double f_min, double f_max, double min_peak_ratio, int recent_samples,
+                                    int* span_samples);
 
 private:
   struct Plan;
