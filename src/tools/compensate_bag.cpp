@@ -8,6 +8,7 @@
 // The output is written to a temporary file next to OUT and renamed when complete, so a failure
 // never leaves a partial OUT behind; IN is never overwritten. Exit status: 0 success, 1 error,
 // 2 wrong command line.
+#include <algorithm>
 #include <chrono>
 #include <cinttypes>
 #include <cstdint>
@@ -125,9 +126,64 @@ std::uint32_t u32(const char* p)
 struct RecordFields
 {
   std::string op, compression, conn, count, ver, size;
+  std::string index_pos, conn_count, chunk_count, chunk_pos;  ///< file header, chunk info
 };
 
-constexpr char kOpMessage = '\x02', kOpIndexData = '\x04', kOpChunk = '\x05', kOpConnection = '\x07';
+constexpr char kOpMessage = '\x02', kOpFileHeader = '\x03', kOpIndexData = '\x04', kOpChunk = '\x05',
+               kOpChunkInfo = '\x06', kOpConnection = '\x07';
+
+/// Little-endian u64 of an 8-byte field, or nothing.
+std::optional<std::uint64_t> u64(const std::string& field)
+{
+  if (field.size() != 8)
+  {
+    return std::nullopt;
+  }
+  return static_cast<std::uint64_t>(u32(field.data())) | (static_cast<std::uint64_t>(u32(field.data() + 4)) << 32);
+}
+
+/// Where rosbag goes by offsets it reads from the file: the file header's index_pos must be the
+/// start of conn_count connection records followed by chunk_count chunk info records (read at
+/// open), and each chunk info's chunk_pos the start of a chunk record (read when iterating).
+/// `records`: offset and op of every top-level record, in file order.
+std::string checkOffsets(const RecordFields& file_header, const std::vector<std::pair<std::uint64_t, char>>& records,
+                         const std::vector<std::pair<std::uint64_t, std::uint64_t>>& chunk_positions)
+{
+  const std::optional<std::uint64_t> index_pos = u64(file_header.index_pos);
+  if (!index_pos || *index_pos == 0)
+  {
+    return std::string();  // no index: rosbag refuses the bag itself ("unindexed")
+  }
+  const auto start = std::find_if(records.begin(), records.end(),
+                                  [&](const auto& r) { return r.first == *index_pos; });
+  if (start == records.end())
+  {
+    return "the file header's index position " + std::to_string(*index_pos) + " is not the start of a record";
+  }
+  const std::uint32_t connections = file_header.conn_count.size() == 4 ? u32(file_header.conn_count.data()) : 0;
+  const std::uint32_t chunks = file_header.chunk_count.size() == 4 ? u32(file_header.chunk_count.data()) : 0;
+  auto next = start;
+  for (std::uint64_t k = 0; k < std::uint64_t{ connections } + chunks; ++k, ++next)
+  {
+    const char expected = k < connections ? kOpConnection : kOpChunkInfo;
+    if (next == records.end() || next->second != expected)
+    {
+      return "the file header announces " + std::to_string(connections) + " connection and " +
+             std::to_string(chunks) + " chunk info records at byte " + std::to_string(*index_pos) +
+             ", which the file does not hold";
+    }
+  }
+  for (const auto& [where, chunk_pos] : chunk_positions)
+  {
+    if (std::none_of(records.begin(), records.end(),
+                     [&](const auto& r) { return r.first == chunk_pos && r.second == kOpChunk; }))
+    {
+      return "chunk info record at byte " + std::to_string(where) + " points at byte " + std::to_string(chunk_pos) +
+             ", where no chunk starts";
+    }
+  }
+  return std::string();
+}
 
 /// Checks that every field of a record header lies inside it and picks out RecordFields.
 /// @return an empty string, or what is wrong
@@ -153,7 +209,9 @@ std::string checkHeader(const std::string& header, std::uint64_t where, RecordFi
     const std::string name = field.substr(0, equals), value = equals == std::string::npos ? "" : field.substr(equals + 1);
     for (auto [key, target] : { std::pair{ "op", &fields->op }, { "compression", &fields->compression },
                                 { "conn", &fields->conn }, { "count", &fields->count }, { "ver", &fields->ver },
-                                { "size", &fields->size } })
+                                { "size", &fields->size }, { "index_pos", &fields->index_pos },
+                                { "conn_count", &fields->conn_count }, { "chunk_count", &fields->chunk_count },
+                                { "chunk_pos", &fields->chunk_pos } })
     {
       if (name == key)
       {
@@ -295,6 +353,9 @@ std::string checkBagStructure(const std::string& path)
   const std::uint64_t size = static_cast<std::uint64_t>(file.tellg());
   std::uint64_t position = kMagic.size();
   ChunkLayout chunk;
+  RecordFields file_header;
+  std::vector<std::pair<std::uint64_t, char>> records;                  // offset, op
+  std::vector<std::pair<std::uint64_t, std::uint64_t>> chunk_positions;  // chunk info offset, chunk_pos
   char length[4];
   while (position + 4 <= size)
   {
@@ -331,6 +392,15 @@ std::string checkBagStructure(const std::string& path)
              " bytes but the file ends " + std::to_string(size - position) + " bytes later";
     }
     const char op = fields.op.size() == 1 ? fields.op[0] : '\0';
+    records.emplace_back(record, op);
+    if (op == kOpFileHeader && records.size() == 1)
+    {
+      file_header = fields;
+    }
+    else if (op == kOpChunkInfo)
+    {
+      chunk_positions.emplace_back(record, u64(fields.chunk_pos).value_or(0));
+    }
     const bool walk_chunk = op == kOpChunk && fields.compression == "none";
     std::string data;
     if (op == kOpConnection || op == kOpIndexData || walk_chunk)
@@ -365,7 +435,7 @@ std::string checkBagStructure(const std::string& path)
     }
     position += data_length;
   }
-  return std::string();
+  return checkOffsets(file_header, records, chunk_positions);
 }
 
 /// Writes the outputs of one bag; the caller owns the temporary file.
