@@ -173,13 +173,14 @@ std::string checkOffsets(const RecordFields& file_header, const std::vector<std:
              ", which the file does not hold";
     }
   }
-  for (const auto& [where, chunk_pos] : chunk_positions)
+  for (const auto& chunk_info : chunk_positions)
   {
+    const std::uint64_t chunk_pos = chunk_info.second;
     if (std::none_of(records.begin(), records.end(),
                      [&](const auto& r) { return r.first == chunk_pos && r.second == kOpChunk; }))
     {
-      return "chunk info record at byte " + std::to_string(where) + " points at byte " + std::to_string(chunk_pos) +
-             ", where no chunk starts";
+      return "chunk info record at byte " + std::to_string(chunk_info.first) + " points at byte " +
+             std::to_string(chunk_pos) + ", where no chunk starts";
     }
   }
   return std::string();
