@@ -23,7 +23,9 @@
 #include <string>
 #include <vector>
 
+#include <bzlib.h>
 #include <ros/exception.h>
+#include <roslz4/lz4s.h>
 #include <rosbag/bag.h>
 #include <rosbag/exceptions.h>
 #include <rosbag/view.h>
@@ -258,10 +260,36 @@ std::string checkRecord(const std::string& data, std::size_t offset, std::uint64
 struct ChunkLayout
 {
   bool present = false;
-  bool walked = false;               ///< uncompressed: every record start is known
+  bool walked = false;               ///< records walked (decompressed first if need be): every record start is known
   std::uint64_t uncompressed_size = 0;
   std::map<std::uint32_t, std::string> messages;  ///< offset of each message record -> its conn
 };
+
+/// A compressed chunk's data decompressed into *plain, as rosbag will (same libraries), so that
+/// its records can be walked before rosbag parses them unchecked. `declared`: the chunk header's
+/// uncompressed size; refused above 1000 x the compressed size + 1 MiB (rosbag would allocate it).
+std::string decompressChunk(const std::string& compression, std::string& data, std::uint64_t declared,
+                            std::uint64_t where, std::string* plain)
+{
+  const std::string what = "chunk at byte " + std::to_string(where) + " (" + compression + ")";
+  if (declared > 1000 * std::uint64_t{ data.size() } + (1u << 20))
+  {
+    return what + " declares " + std::to_string(declared) + " uncompressed bytes for " +
+           std::to_string(data.size()) + " compressed ones";
+  }
+  plain->assign(declared, '\0');
+  unsigned int produced = static_cast<unsigned int>(declared);
+  const bool ok = compression == "lz4" ?
+                      roslz4_buffToBuffDecompress(&data[0], static_cast<unsigned int>(data.size()), &(*plain)[0],
+                                                  &produced) == ROSLZ4_OK :
+                      BZ2_bzBuffToBuffDecompress(&(*plain)[0], &produced, &data[0],
+                                                 static_cast<unsigned int>(data.size()), 0, 0) == BZ_OK;
+  if (!ok || produced != declared)
+  {
+    return what + " does not decompress to the " + std::to_string(declared) + " bytes it declares";
+  }
+  return std::string();
+}
 
 /// The records of an uncompressed chunk; connection records' data is a header too.
 std::string walkChunk(const std::string& data, std::uint64_t base, ChunkLayout* layout)
@@ -328,7 +356,7 @@ std::string checkIndex(const RecordFields& fields, const std::string& data, std:
 /// Walks the record structure of a bag (format 2.0) before rosbag reads it: every field of
 /// every record header that is present must lie inside its header, also for the records inside
 /// uncompressed chunks, and every index entry must point at a message of its connection in the
-/// chunk before it (inside a compressed chunk's size: its records are not walked). rosbag
+/// chunk before it (compressed chunks are decompressed first, as rosbag will). rosbag
 /// (ros::Header::parse, Bag::readHeaderFromBuffer) trusts those lengths and offsets and reads
 /// past its buffer on a corrupt one (found by test/fuzz/fuzz_bag.cpp; docs/reliability.md F7,
 /// F10). A record cut off by the end of the file (a bag that ends mid-chunk) is reported here
@@ -403,8 +431,9 @@ std::string checkBagStructure(const std::string& path)
       chunk_positions.emplace_back(record, u64(fields.chunk_pos).value_or(0));
     }
     const bool walk_chunk = op == kOpChunk && fields.compression == "none";
+    const bool compressed_chunk = op == kOpChunk && (fields.compression == "lz4" || fields.compression == "bz2");
     std::string data;
-    if (op == kOpConnection || op == kOpIndexData || walk_chunk)
+    if (op == kOpConnection || op == kOpIndexData || walk_chunk || compressed_chunk)
     {
       data.resize(data_length);
       file.read(&data[0], data_length);
@@ -424,6 +453,17 @@ std::string checkBagStructure(const std::string& path)
       if (walk_chunk)
       {
         why = walkChunk(data, position, &chunk);
+      }
+      else if (compressed_chunk)
+      {
+        // Offsets in the messages below are then counted in the decompressed data.
+        std::string plain;
+        why = decompressChunk(fields.compression, data, chunk.uncompressed_size, record, &plain);
+        if (why.empty())
+        {
+          chunk.walked = true;
+          why = walkChunk(plain, position, &chunk);
+        }
       }
     }
     else if (op == kOpIndexData)
