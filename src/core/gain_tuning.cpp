@@ -24,10 +24,7 @@ Vector3 slowMotionRms(const std::vector<ImuSample>& samples, const CompensatorCo
   const double start = samples.front().t;
   for (const ImuSample& s : samples)
   {
-    const SampleStatus status = compensator.addSample(s, &out);
-    const bool output = status == SampleStatus::kAccepted || status == SampleStatus::kGapReset ||
-                        status == SampleStatus::kResetBackwards;
-    if (!output || s.t - start < settle)
+    if (!producedOutput(compensator.addSample(s, &out)) || s.t - start < settle)
       continue;
     for (int i = 0; i < 3; ++i)
       if (std::isfinite(out.position_filtered[i]))

@@ -228,7 +228,7 @@ void CompensatorRos::imuCallback(const sensor_msgs::Imu::ConstPtr& msg)
   }
   CompensatorOutput out;
   const SampleStatus status = compensator_->addSample(sample, &out);
-  if (status == SampleStatus::kAccepted || status == SampleStatus::kGapReset || status == SampleStatus::kResetBackwards)
+  if (producedOutput(status))
   {
     has_orientation_ = sample.has_orientation;
     seen_orientation_ = seen_orientation_ || sample.has_orientation;

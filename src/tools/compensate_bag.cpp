@@ -695,8 +695,7 @@ private:
     }
     CompensatorOutput result;
     const SampleStatus status = compensator_.addSample(sample, &result);
-    if (status != SampleStatus::kAccepted && status != SampleStatus::kGapReset &&
-        status != SampleStatus::kResetBackwards)
+    if (!producedOutput(status))
     {
       return;
     }

@@ -143,6 +143,12 @@ enum class SampleStatus
   kGapReset,               ///< gap longer than max_gap: integration reset, sample starts anew
 };
 std::string toString(SampleStatus status);
+/// True when addSample filled its output for this sample (accepted, or accepted after a reset).
+inline bool producedOutput(SampleStatus status)
+{
+  return status == SampleStatus::kAccepted || status == SampleStatus::kGapReset ||
+         status == SampleStatus::kResetBackwards;
+}
 
 /// Output for one accepted sample, level ENU frame.
 struct CompensatorOutput
