@@ -3,7 +3,8 @@ add_library(${PROJECT_NAME}_core
   src/core/compensator.cpp
   src/core/frequency_tracker.cpp
   src/core/calibration_file.cpp
-  src/core/gain_tuning.cpp)
+  src/core/gain_tuning.cpp
+  src/core/gyro_attitude.cpp)
 target_include_directories(${PROJECT_NAME}_core PUBLIC include)
 target_link_libraries(${PROJECT_NAME}_core PUBLIC Eigen3::Eigen PkgConfig::FFTW3 yaml-cpp)
 
@@ -13,6 +14,7 @@ if(CATKIN_ENABLE_TESTING)
     test/core/test_frequency_tracker.cpp
     test/core/test_compensator.cpp
     test/core/test_bad_input.cpp
-    test/core/test_gain_tuning.cpp)
+    test/core/test_gain_tuning.cpp
+    test/core/test_gyro_attitude.cpp)
   target_link_libraries(test_core ${PROJECT_NAME}_core)
 endif()

@@ -354,6 +354,8 @@ bool CompensatorConfig::validate(std::string* why) const
   check(harmonic_memory >= 0.5, "harmonic_memory", ">= 0.5 s", harmonic_memory);
   check(drift_time_constant >= 0.5, "drift_time_constant",
         ">= 0.5 s (faster drift removal would follow the waves)", drift_time_constant);
+  check(tilt_time_constant >= 2.0 && tilt_time_constant <= 3600.0, "tilt_time_constant",
+        "2 <= s <= 3600 (shorter follows the wave accelerations)", tilt_time_constant);
   check(gravity > 9.0 && gravity < 10.5, "gravity", "9.0 < g < 10.5 m/s^2", gravity);
   check(max_gap > 0.0, "max_gap", "> 0 s", max_gap);
   check(max_rate_change > 0.0 && max_rate_change < 1.0, "max_rate_change", "0 < r < 1", max_rate_change);
@@ -479,6 +481,9 @@ public:
     last_t_ = s.t;
     ++counters_.accepted;
 
+    if (config_.gyro_attitude)
+      attitudeFromGyro(&s, dt);
+
     updateLevel(s, dt);
     CompensatorOutput output;
     if (needsCalibration())
@@ -510,6 +515,7 @@ public:
     level_source_ = LevelSource::kNone;
     attitude_samples_ = 0;
     orientation_lost_ = false;
+    gyro_.reset();
     calibration_buffer_.clear();
     if (!bias_from_file_)
     {
@@ -648,6 +654,24 @@ private:
       axis.time_since_reset = 0.0;
     }
     since_analysis_ = 0;
+  }
+
+  /// gyro_attitude: a sample without orientation gets the gyro's, which starts from the IMU's
+  /// last orientation if there was one, from the specific force otherwise.
+  void attitudeFromGyro(ImuSample* s, double dt)
+  {
+    if (s->has_orientation)
+    {
+      gyro_.reset(s->orientation);
+      return;
+    }
+    gyro_.setConfig({ config_.tilt_time_constant, config_.estimate_gyro_bias });
+    gyro_.update(s->angular_rate, s->specific_force, dt);
+    if (gyro_.initialised())
+    {
+      s->orientation = gyro_.attitude();
+      s->has_orientation = true;
+    }
   }
 
   /// Level frame for samples without orientation. While the IMU gives orientation its mean over
@@ -1085,6 +1109,7 @@ private:
   bool level_calibrated_ = false;
   LevelSource level_source_ = LevelSource::kNone;
   Quaternion attitude_ = Quaternion::Identity();  ///< mean IMU orientation (updateLevel)
+  GyroAttitude gyro_;  ///< attitude of samples without orientation (gyro_attitude)
   long attitude_samples_ = 0;
   bool orientation_lost_ = false;  ///< the last sample had no orientation
   bool last_had_orientation_ = false;

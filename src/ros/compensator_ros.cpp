@@ -43,6 +43,9 @@ bool applyTuning(const TuningConfig& tuning, CompensatorConfig* config, std::str
   config->harmonics = tuning.harmonics;
   config->harmonic_memory = tuning.harmonic_memory;
   config->drift_time_constant = tuning.drift_time_constant;
+  config->gyro_attitude = tuning.gyro_attitude;
+  config->tilt_time_constant = tuning.tilt_time_constant;
+  config->estimate_gyro_bias = tuning.estimate_gyro_bias;
   config->max_gap = tuning.max_gap;
   return true;
 }
@@ -73,6 +76,9 @@ void toTuning(const CompensatorConfig& config, TuningConfig* tuning)
   tuning->harmonics = config.harmonics;
   tuning->harmonic_memory = config.harmonic_memory;
   tuning->drift_time_constant = config.drift_time_constant;
+  tuning->gyro_attitude = config.gyro_attitude;
+  tuning->tilt_time_constant = config.tilt_time_constant;
+  tuning->estimate_gyro_bias = config.estimate_gyro_bias;
   tuning->max_gap = config.max_gap;
 }
 

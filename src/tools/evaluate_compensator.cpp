@@ -109,6 +109,11 @@ std::vector<sim::Sample> simulate(const sim::Scenario& scenario, std::uint64_t s
   return samples;
 }
 
+/// The default mode's methods without the IMU's orientation (see main).
+const char* const kFixedLevel = "default, no orientation: one level frame";
+const char* const kGyroLevel = "default, no orientation: gyro attitude";
+const char* const kGyroLevelBias = "default, no orientation: gyro attitude, gyro bias estimated";
+
 /// Seed of the training run that "paper tuned" is tuned on: never among the evaluated seeds 1..N.
 constexpr std::uint64_t kTrainingSeed = 1000;
 
@@ -281,9 +286,17 @@ private:
   PeriodErrors errors_;
 };
 
+/// Whether the compensator is handed the IMU's orientation or has to level the samples itself.
+enum class Orientation
+{
+  kGiven,
+  kWithheld,
+};
+
 /// One method's errors; `period`, if given, receives the period tracking of the run.
 Errors evaluate(const std::vector<sim::Sample>& samples, double rate, const pbc::CompensatorConfig& config,
-                const std::optional<Vector3>& bias, double settle, PeriodErrors* period = nullptr)
+                const std::optional<Vector3>& bias, double settle, PeriodErrors* period = nullptr,
+                Orientation orientation = Orientation::kGiven)
 {
   pbc::Compensator compensator(config);
   if (bias && !compensator.setConstantBias(*bias))
@@ -294,7 +307,9 @@ Errors evaluate(const std::vector<sim::Sample>& samples, double rate, const pbc:
   pbc::CompensatorOutput out;
   for (const auto& s : samples)
   {
-    compensator.addSample(sim::toImuSample(s), &out);
+    pbc::ImuSample imu = sim::toImuSample(s);
+    imu.has_orientation = orientation == Orientation::kGiven;
+    compensator.addSample(imu, &out);
     scorer.add(s, out.position_filtered, out.position_wave);
     if (period != nullptr)
       period_scorer.add(s, out);
@@ -526,7 +541,8 @@ int main(int argc, char** argv)
       std::cerr << "\n" << tuning_note;
     }
 
-    std::vector<std::string> methods = { "raw", "highpass", "constant", "paper", "paper tuned", "default" };
+    std::vector<std::string> methods = { "raw",     "highpass", "constant", "paper", "paper tuned", "default",
+                                         kFixedLevel, kGyroLevel, kGyroLevelBias };
     for (const auto& estimate : options.estimates)
       methods.push_back(estimate.first);
     std::map<std::string, std::vector<Errors>> results;
@@ -547,6 +563,18 @@ int main(int argc, char** argv)
       results["paper tuned"].push_back(evaluate(samples, scenario.rate, tuned, calibrated_bias, options.settle));
       periods.emplace_back();
       results["default"].push_back(evaluate(samples, scenario.rate, ours, std::nullopt, options.settle, &periods.back()));
+      // The same without the IMU's orientation: one level frame, or the gyro's attitude without
+      // and with its bias estimated.
+      results[kFixedLevel].push_back(
+          evaluate(samples, scenario.rate, ours, std::nullopt, options.settle, nullptr, Orientation::kWithheld));
+      pbc::CompensatorConfig gyro = ours;
+      gyro.gyro_attitude = true;
+      gyro.estimate_gyro_bias = false;
+      results[kGyroLevel].push_back(
+          evaluate(samples, scenario.rate, gyro, std::nullopt, options.settle, nullptr, Orientation::kWithheld));
+      gyro.estimate_gyro_bias = true;
+      results[kGyroLevelBias].push_back(
+          evaluate(samples, scenario.rate, gyro, std::nullopt, options.settle, nullptr, Orientation::kWithheld));
       for (const auto& [name, pattern] : options.estimates)
         results[name].push_back(scoreEstimate(samples, seedPath(pattern, seed), options.settle));
     }

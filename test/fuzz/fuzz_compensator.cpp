@@ -57,7 +57,14 @@ pbc::CompensatorConfig makeConfig(pbc_fuzz::Input& in, bool wild)
   c.min_frequency = wild ? in.value(0.3, 0.3) : in.range(0.2, 0.6);
   c.max_frequency = wild ? in.value(2.0, 2.0) : in.range(0.7, 5.0);
   c.min_peak_ratio = wild ? in.value(30.0, 30.0) : in.range(1.0, 60.0);
-  c.harmonics = 1 + in.byte() % 4;
+  // One byte, as before the gyro attitude existed (the corpus keeps its meaning elsewhere): its
+  // low bits the harmonics, the next the gyro attitude and its bias estimate, the rest its time
+  // constant (2 .. 64 s).
+  const int harmonics_byte = in.byte();
+  c.harmonics = 1 + harmonics_byte % 4;
+  c.gyro_attitude = (harmonics_byte / 4) % 2 == 1;
+  c.estimate_gyro_bias = (harmonics_byte / 8) % 2 == 1;
+  c.tilt_time_constant = 2.0 + 2.0 * ((harmonics_byte / 16) % 32);
   c.harmonic_memory = wild ? in.value(10.0, 10.0) : in.range(0.5, 20.0);
   c.drift_time_constant = wild ? in.value(2.0, 2.0) : in.range(0.5, 10.0);
   c.max_gap = wild ? in.value(0.5, 0.5) : in.range(0.01, 2.0);
@@ -102,10 +109,12 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   auto dump = [](const pbc::CompensatorConfig& k) {
     std::fprintf(stderr,
                  "config: mode %s constant %d periodic %d static %d calibration %.6g window %.6g hop %.6g band "
-                 "%.6g-%.6g ratio %.6g harmonics %d memory %.6g drift %.6g max_gap %.6g rate_change %.6g gains",
+                 "%.6g-%.6g ratio %.6g harmonics %d memory %.6g drift %.6g max_gap %.6g rate_change %.6g gyro %d %d "
+                 "%.6g gains",
                  pbc::toString(k.mode).c_str(), k.enable_constant, k.enable_periodic, k.assume_static_calibration,
                  k.calibration_duration, k.fft_window, k.fft_hop, k.min_frequency, k.max_frequency, k.min_peak_ratio,
-                 k.harmonics, k.harmonic_memory, k.drift_time_constant, k.max_gap, k.max_rate_change);
+                 k.harmonics, k.harmonic_memory, k.drift_time_constant, k.max_gap, k.max_rate_change, k.gyro_attitude,
+                 k.estimate_gyro_bias, k.tilt_time_constant);
     for (const auto& g : k.gains)
     {
       std::fprintf(stderr, " [%.6g %.6g %.6g %.6g]", g.alpha_v, g.alpha_p, g.beta_v, g.beta_p);

@@ -192,6 +192,9 @@ TEST(Parameters, ShippedFileReadsAndKeepsTheCoreDefaults)
   EXPECT_EQ(c.harmonics, defaults.harmonics);
   EXPECT_DOUBLE_EQ(c.harmonic_memory, defaults.harmonic_memory);
   EXPECT_DOUBLE_EQ(c.drift_time_constant, defaults.drift_time_constant);
+  EXPECT_EQ(c.gyro_attitude, defaults.gyro_attitude);
+  EXPECT_DOUBLE_EQ(c.tilt_time_constant, defaults.tilt_time_constant);
+  EXPECT_EQ(c.estimate_gyro_bias, defaults.estimate_gyro_bias);
   EXPECT_DOUBLE_EQ(c.gravity, defaults.gravity);
   EXPECT_DOUBLE_EQ(c.max_gap, defaults.max_gap);
   EXPECT_DOUBLE_EQ(c.max_rate_change, defaults.max_rate_change);

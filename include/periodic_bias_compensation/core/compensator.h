@@ -15,6 +15,7 @@
 #include <Eigen/Geometry>
 
 #include "periodic_bias_compensation/core/frequency_tracker.h"
+#include "periodic_bias_compensation/core/gyro_attitude.h"
 
 namespace periodic_bias_compensation
 {
@@ -82,6 +83,13 @@ struct CompensatorConfig
   int harmonics = 2;             ///< harmonics of the dominant frequency tracked (default mode)
   double harmonic_memory = 10.0; ///< time constant of the harmonic estimator [s] (default mode)
   double drift_time_constant = 2.0;  ///< slow-motion drift removal time constant [s] (default)
+
+  /// Samples without orientation: level them with an attitude integrated from the gyro
+  /// (GyroAttitude) rather than with one fixed level frame, which leaks g sin(roll) and
+  /// g sin(pitch) of the hull's motion into the level axes.
+  bool gyro_attitude = false;
+  double tilt_time_constant = 30.0;  ///< GyroAttitudeConfig::tilt_time_constant [s]
+  bool estimate_gyro_bias = true;    ///< GyroAttitudeConfig::estimate_bias
 
   double gravity = kStandardGravity;  ///< local gravity magnitude [m/s^2]
   double max_gap = 0.5;          ///< a gap longer than this resets the integration [s]

@@ -1,0 +1,72 @@
+// Attitude from the gyro for IMUs that report none (estimation core, no ROS).
+//
+// A complementary filter: the gyro rate, less its estimated bias, turns the attitude; the
+// direction of the mean specific force (gravity, once the wave accelerations average out) pulls
+// roll and pitch back over a time constant of tens of seconds. With gyro bias estimation the
+// pull is a proportional-integral loop whose integral is the gyro bias on the level axes (the
+// paper's second item of future work: compensate the gyros too); without it a constant gyro
+// bias b leaves a standing tilt of b x tilt_time_constant. Yaw is the gyro's integral only
+// (nothing observes it), so its bias is not estimated.
+//
+// Threading: not thread-safe; the owner serialises calls.
+#pragma once
+
+#include <Eigen/Geometry>
+
+namespace periodic_bias_compensation
+{
+struct GyroAttitudeConfig
+{
+  /// Time constant with which the tilt follows the mean specific force [s]. Long against the
+  /// wave period, so the wave accelerations average out; short against how fast the gyro bias
+  /// changes.
+  double tilt_time_constant = 30.0;
+  /// Estimate the gyro bias on the level axes (proportional-integral loop, a double pole at
+  /// -1 / tilt_time_constant) rather than only pulling the tilt (one pole there).
+  bool estimate_bias = true;
+};
+
+class GyroAttitude
+{
+public:
+  explicit GyroAttitude(const GyroAttitudeConfig& config = GyroAttitudeConfig());
+
+  /// Starts over from the attitude `start` (sensor -> level) or, without one, from the next
+  /// sample's specific force (roll and pitch, yaw zero).
+  void reset();
+  void reset(const Eigen::Quaterniond& start);
+
+  /// Turns the attitude by the gyro over dt [s] and pulls the tilt towards the specific force
+  /// [m/s^2, sensor frame]. Returns the attitude, sensor -> level ENU. For dt = 0 (first sample,
+  /// or after a reset) the attitude is only initialised.
+  const Eigen::Quaterniond& update(const Eigen::Vector3d& angular_rate, const Eigen::Vector3d& specific_force,
+                                   double dt);
+
+  const Eigen::Quaterniond& attitude() const
+  {
+    return attitude_;
+  }
+  /// Estimated gyro bias, sensor frame [rad/s] (zero without estimate_bias).
+  const Eigen::Vector3d& gyroBias() const
+  {
+    return bias_;
+  }
+  bool initialised() const
+  {
+    return initialised_;
+  }
+
+  void setConfig(const GyroAttitudeConfig& config)
+  {
+    config_ = config;
+  }
+
+private:
+  GyroAttitudeConfig config_;
+  Eigen::Quaterniond attitude_ = Eigen::Quaterniond::Identity();
+  Eigen::Vector3d bias_ = Eigen::Vector3d::Zero();
+  bool initialised_ = false;
+  double elapsed_ = 0.0;  ///< time since initialisation [s]
+};
+
+}  // namespace periodic_bias_compensation
