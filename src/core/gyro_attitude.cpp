@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace periodic_bias_compensation
 {
@@ -35,6 +36,8 @@ void GyroAttitude::reset(const Eigen::Quaterniond& start)
   reset();
   attitude_ = start.normalized();
   initialised_ = true;
+  // A reported attitude needs no fast start (which would follow the wave accelerations).
+  elapsed_ = std::numeric_limits<double>::infinity();
 }
 
 const Eigen::Quaterniond& GyroAttitude::update(const Eigen::Vector3d& angular_rate,

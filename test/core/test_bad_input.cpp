@@ -193,14 +193,17 @@ TEST(BadInput, ChangedSampleRateIsDetectedAndFollowed)
 TEST(BadInput, NoOrientationUsesTheLevelFromCalibration)
 {
   // The same motion without orientation, sensor tilted by 3 degrees about x: the level is found
-  // from the calibration window's mean specific force and the wave is still tracked.
+  // from the calibration window's mean specific force and the wave is still tracked (with
+  // gyro_attitude off: one level frame; test_gyro_attitude has the gyro's).
   pbc::test::Shake shake;
   shake.with_orientation = false;
   auto r = pbc::test::makeShake(shake);
   const pbc::Quaternion tilt(Eigen::AngleAxisd(3.0 * M_PI / 180.0, Vector3::UnitX()));
   for (auto& s : r.samples)
     s.specific_force = tilt.inverse() * s.specific_force;
-  Compensator c;
+  CompensatorConfig config;
+  config.gyro_attitude = false;
+  Compensator c(config);
   CompensatorOutput out;
   double error = 0.0, truth = 0.0;
   for (std::size_t k = 0; k < r.samples.size(); ++k)
@@ -376,9 +379,12 @@ TEST(BadInput, OrientationLostMidRunLevelsWithTheMeanAttitude)
   // F4: when orientation stopped mid-run, the level came from the one sample at that moment
   // (its gravity direction, wave acceleration and instantaneous roll included). The hull here
   // lists 5 degrees and rolls +-4 degrees with the 8 s waves; orientation stops at a roll
-  // extreme. The level must be the mean attitude, not the instantaneous one.
+  // extreme. The level must be the mean attitude, not the instantaneous one (gyro_attitude off:
+  // with it the gyro carries the last orientation on, test_gyro_attitude).
   const double rate = 50.0, list = 5.0 * M_PI / 180.0, roll = 4.0 * M_PI / 180.0, w = 2.0 * M_PI / 8.0;
-  Compensator c;
+  CompensatorConfig config;
+  config.gyro_attitude = false;
+  Compensator c(config);
   CompensatorOutput out;
   const int cut = static_cast<int>(122.0 * rate);  // 122 s = 15.25 periods: roll at its maximum
   for (int k = 0; k < cut + 200; ++k)

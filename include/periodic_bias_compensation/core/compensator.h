@@ -86,8 +86,9 @@ struct CompensatorConfig
 
   /// Samples without orientation: level them with an attitude integrated from the gyro
   /// (GyroAttitude) rather than with one fixed level frame, which leaks g sin(roll) and
-  /// g sin(pitch) of the hull's motion into the level axes.
-  bool gyro_attitude = false;
+  /// g sin(pitch) of the hull's motion into the level axes. It starts from the IMU's last
+  /// orientation when that stops, from the specific force otherwise.
+  bool gyro_attitude = true;
   double tilt_time_constant = 30.0;  ///< GyroAttitudeConfig::tilt_time_constant [s]
   bool estimate_gyro_bias = true;    ///< GyroAttitudeConfig::estimate_bias
 

@@ -66,7 +66,7 @@ private:
   Eigen::Quaterniond attitude_ = Eigen::Quaterniond::Identity();
   Eigen::Vector3d bias_ = Eigen::Vector3d::Zero();
   bool initialised_ = false;
-  double elapsed_ = 0.0;  ///< time since initialisation [s]
+  double elapsed_ = 0.0;  ///< time since initialisation from the specific force [s]
 };
 
 }  // namespace periodic_bias_compensation
