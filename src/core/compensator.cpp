@@ -316,6 +316,8 @@ std::string toString(LevelSource source)
       return "gravity direction of the calibration window";
     case LevelSource::kAttitudeBeforeLoss:
       return "mean IMU orientation before it stopped";
+    case LevelSource::kGyroAttitude:
+      return "attitude integrated from the gyro";
   }
   return "unknown";
 }
@@ -483,6 +485,8 @@ public:
 
     if (config_.gyro_attitude)
       attitudeFromGyro(&s, dt);
+    else
+      gyro_levelled_ = false;
 
     updateLevel(s, dt);
     CompensatorOutput output;
@@ -516,6 +520,7 @@ public:
     attitude_samples_ = 0;
     orientation_lost_ = false;
     gyro_.reset();
+    gyro_levelled_ = false;
     calibration_buffer_.clear();
     if (!bias_from_file_)
     {
@@ -566,7 +571,11 @@ public:
   }
   LevelSource levelSource() const
   {
-    return level_source_;
+    return gyro_levelled_ ? LevelSource::kGyroAttitude : level_source_;
+  }
+  Vector3 gyroBias() const
+  {
+    return gyro_.gyroBias();
   }
   const CompensatorCounters& counters() const
   {
@@ -660,6 +669,7 @@ private:
   /// last orientation if there was one, from the specific force otherwise.
   void attitudeFromGyro(ImuSample* s, double dt)
   {
+    gyro_levelled_ = false;
     if (s->has_orientation)
     {
       gyro_.reset(s->orientation);
@@ -671,6 +681,7 @@ private:
     {
       s->orientation = gyro_.attitude();
       s->has_orientation = true;
+      gyro_levelled_ = true;
     }
   }
 
@@ -1110,6 +1121,7 @@ private:
   LevelSource level_source_ = LevelSource::kNone;
   Quaternion attitude_ = Quaternion::Identity();  ///< mean IMU orientation (updateLevel)
   GyroAttitude gyro_;  ///< attitude of samples without orientation (gyro_attitude)
+  bool gyro_levelled_ = false;  ///< the last sample's orientation came from gyro_
   long attitude_samples_ = 0;
   bool orientation_lost_ = false;  ///< the last sample had no orientation
   bool last_had_orientation_ = false;
@@ -1167,6 +1179,10 @@ Quaternion Compensator::levelOrientation() const
 LevelSource Compensator::levelSource() const
 {
   return impl_->levelSource();
+}
+Vector3 Compensator::gyroBias() const
+{
+  return impl_->gyroBias();
 }
 const CompensatorCounters& Compensator::counters() const
 {

@@ -560,9 +560,10 @@ void CompensatorRos::diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat)
   }
   if (seen_orientation_ && !has_orientation_ && counters_.received > 0)
   {
-    raise(DiagnosticStatus::WARN, "IMU orientation missing: levelling with the " +
-                                      toString(compensator_->levelSource()) +
-                                      " (roll and pitch of the hull leak into the level axes)");
+    const LevelSource source = compensator_->levelSource();
+    raise(DiagnosticStatus::WARN,
+          "IMU orientation missing: levelling with the " + toString(source) +
+              (source == LevelSource::kGyroAttitude ? "" : " (roll and pitch of the hull leak into the level axes)"));
   }
   for (int i = 0; i < 3; ++i)
   {
@@ -622,10 +623,18 @@ void CompensatorRos::diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat)
   stat.add("non-finite outputs suppressed", counters_.nonfinite_outputs);
   stat.add("rejected out of range", counters_.rejected_out_of_range);
   stat.add("accepted without orientation", counters_.without_orientation);
-  stat.add("orientation", !seen_orientation_ ? std::string("none in the input: levelled with gravity")
+  stat.add("orientation", !seen_orientation_ ? "none in the input: levelled with the " +
+                                                   toString(compensator_->levelSource())
                                              : (has_orientation_ ? std::string("from the IMU message")
                                                                  : "missing: levelled with the " +
                                                                        toString(compensator_->levelSource())));
+  if (compensator_->levelSource() == LevelSource::kGyroAttitude)
+  {
+    const Vector3 b = compensator_->gyroBias();
+    char text[100];
+    std::snprintf(text, sizeof text, "%.6f %.6f %.6f", b.x(), b.y(), b.z());
+    stat.add("gyro bias estimate x y z [rad/s]", std::string(text));
+  }
   stat.add("refused reconfigures", counters_.refused_reconfigures);
   if (!last_refusal_.empty())
   {

@@ -3,7 +3,8 @@
 // and in the outputs (they keep coming, never a NaN):
 //   - constant input: "no period"; an oscillation: "locked"; constant again: "no period" again
 //   - an invalid gain through dynamic_reconfigure: WARN "reconfigure refused ..." naming the key
-//   - orientation disappears mid-run: WARN "IMU orientation missing ..."; comes back: cleared
+//   - orientation disappears mid-run: WARN "IMU orientation missing: levelling with the attitude
+//     integrated from the gyro"; comes back: cleared
 //   - the sample rate changes: WARN "IMU sample rate changed ..."
 //   - the input stops: ERROR "no IMU data ..."; resumes: ERROR cleared, WARN "gap ..." once
 //   - the IMU restarts with its clock going back: WARN "time went backwards ..."
@@ -105,10 +106,12 @@ TEST(Faults, EachFaultShowsInDiagnosticsAndOutputsContinue)
   stream.orientation = false;
   s = observer.waitForMessage("orientation missing", 10.0);
   EXPECT_EQ(s.level, DiagnosticStatus::WARN) << describe(s);
-  // Levelled with the mean orientation the IMU gave before (not one sample's gravity direction).
-  EXPECT_NE(s.message.find("mean IMU orientation before it stopped"), std::string::npos) << describe(s);
-  EXPECT_EQ(s.values["orientation"], "missing: levelled with the mean IMU orientation before it stopped")
-      << describe(s);
+  // Levelled with the gyro's attitude (gyro_attitude, the default), carried on from the IMU's
+  // last orientation, and its bias estimate shown.
+  EXPECT_NE(s.message.find("attitude integrated from the gyro"), std::string::npos) << describe(s);
+  EXPECT_EQ(s.message.find("leak into the level axes"), std::string::npos) << describe(s);
+  EXPECT_EQ(s.values["orientation"], "missing: levelled with the attitude integrated from the gyro") << describe(s);
+  EXPECT_EQ(s.values.count("gyro bias estimate x y z [rad/s]"), 1u) << describe(s);
   EXPECT_TRUE(observer.waitForOdometry(50, 5.0)) << "outputs stopped without orientation";
   stream.orientation = true;
   s = observer.waitForStatus([](const Status& st) { return st.values.count("orientation") &&

@@ -133,6 +133,7 @@ enum class LevelSource
   kNone,                ///< no sample without orientation yet
   kGravity,             ///< mean specific force (gravity direction) of the calibration window
   kAttitudeBeforeLoss,  ///< mean IMU orientation over the last kAttitudeMemory s before it stopped
+  kGyroAttitude,        ///< attitude integrated from the gyro (gyro_attitude), sample by sample
 };
 std::string toString(LevelSource source);
 
@@ -228,6 +229,9 @@ public:
   /// the mean IMU orientation before it disappeared: see levelSource()).
   Quaternion levelOrientation() const;
   LevelSource levelSource() const;
+  /// Gyro bias estimated by the gyro attitude, sensor frame [rad/s] (zero until it runs, and
+  /// without estimate_gyro_bias).
+  Vector3 gyroBias() const;
 
   const CompensatorCounters& counters() const;
 
