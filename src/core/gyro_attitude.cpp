@@ -61,7 +61,7 @@ const Eigen::Quaterniond& GyroAttitude::update(const Eigen::Vector3d& angular_ra
 
   // The tilt pull starts fast (the first sample's force includes the wave acceleration) and
   // relaxes to tilt_time_constant; the bias integral runs only once it has.
-  const double time_constant = std::clamp(elapsed_, kStartTimeConstant, config_.tilt_time_constant);
+  const double time_constant = std::min(std::max(elapsed_, kStartTimeConstant), config_.tilt_time_constant);
   const bool settled = elapsed_ >= config_.tilt_time_constant;
   Eigen::Vector3d error = Eigen::Vector3d::Zero();
   if (gravity_like)

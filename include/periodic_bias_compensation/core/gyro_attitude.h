@@ -19,7 +19,7 @@ struct GyroAttitudeConfig
 {
   /// Time constant with which the tilt follows the mean specific force [s]. Long against the
   /// wave period, so the wave accelerations average out; short against how fast the gyro bias
-  /// changes.
+  /// changes. Must be > 0 (CompensatorConfig::validate asks for 2 s or more).
   double tilt_time_constant = 30.0;
   /// Estimate the gyro bias on the level axes (proportional-integral loop, a double pole at
   /// -1 / tilt_time_constant) rather than only pulling the tilt (one pole there).
