@@ -244,13 +244,14 @@ TEST(Reliability, OrientationDisappearingMidRunKeepsOutputs)
 {
   const Record r = simulate("moored_sea_state_4.yaml", 300.0);
   const std::size_t cut = r.samples.size() / 3;
-  // Runs with and without orientation from the cut on; returns the largest wave difference
-  // between the two after the cut.
+  // Runs with and without orientation from the cut on; returns the largest horizontal wave
+  // difference between the two after the cut (the level frame acts on the horizontal axes; on z
+  // a period lock gained or lost a sample apart in the two runs can make a larger difference).
   auto run = [&r, cut](bool gyro_attitude) {
     CompensatorConfig config;
     config.gyro_attitude = gyro_attitude;
     Compensator with(config), without(config);
-    double max_difference = 0.0, max_wave_truth = 0.0, max_filtered_difference = 0.0;
+    double max_difference = 0.0, max_wave_truth = 0.0, max_filtered_difference = 0.0, max_horizontal = 0.0;
     for (std::size_t k = 0; k < r.samples.size(); ++k)
     {
       CompensatorOutput a, b;
@@ -265,6 +266,7 @@ TEST(Reliability, OrientationDisappearingMidRunKeepsOutputs)
       if (k >= cut)
       {
         max_difference = std::max(max_difference, (a.position_wave - b.position_wave).norm());
+        max_horizontal = std::max(max_horizontal, (a.position_wave - b.position_wave).head<2>().norm());
         max_filtered_difference = std::max(max_filtered_difference, (a.position_filtered - b.position_filtered).norm());
         max_wave_truth = std::max(max_wave_truth, r.truth[k].truth.wave_position.norm());
       }
@@ -278,14 +280,15 @@ TEST(Reliability, OrientationDisappearingMidRunKeepsOutputs)
     }
     const double level_error =
         without.levelOrientation().angularDistance(pbc::Quaternion(mean.normalized())) * 180.0 / M_PI;
-    std::printf("[orientation lost, gyro_attitude %s] after %.0f s: max |wave difference| %.3f m (wave amplitude up "
-                "to %.2f m), max |filtered difference| %.3f m; level %.2f deg from the mean attitude (%s)\n",
-                gyro_attitude ? "true" : "false", r.samples[cut].t - r.samples[0].t, max_difference, max_wave_truth,
-                max_filtered_difference, level_error, pbc::toString(without.levelSource()).c_str());
+    std::printf("[orientation lost, gyro_attitude %s] after %.0f s: max |wave difference| %.3f m, horizontal %.3f m "
+                "(wave amplitude up to %.2f m), max |filtered difference| %.3f m; level %.2f deg from the mean "
+                "attitude (%s)\n",
+                gyro_attitude ? "true" : "false", r.samples[cut].t - r.samples[0].t, max_difference, max_horizontal,
+                max_wave_truth, max_filtered_difference, level_error, pbc::toString(without.levelSource()).c_str());
     // Levelled with one frame, the roll and pitch of the hull leak into the level axes: a
     // bounded difference, not a jump.
     EXPECT_LT(max_difference, max_wave_truth);
-    return max_difference;
+    return max_horizontal;
   };
   const double fixed = run(false);
   const double gyro = run(true);

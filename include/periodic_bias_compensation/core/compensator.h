@@ -81,7 +81,7 @@ struct CompensatorConfig
   double max_frequency = 2.0;    ///< highest dominant frequency searched [Hz]
   double min_peak_ratio = 30.0;  ///< peak power / median power in band needed for a lock [-]
   int harmonics = 2;             ///< harmonics of the dominant frequency tracked (default mode)
-  double harmonic_memory = 10.0; ///< time constant of the harmonic estimator [s] (default mode)
+  double harmonic_memory = 3.0; ///< time constant of the harmonic estimator [s] (default mode)
   double drift_time_constant = 2.0;  ///< slow-motion drift removal time constant [s] (default)
 
   /// Samples without orientation: level them with an attitude integrated from the gyro
