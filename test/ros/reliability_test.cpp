@@ -158,6 +158,8 @@ TEST(Reliability, InvalidGainsWhileDataFlowsAreRefusedAndLeaveTheEstimateUnharme
     bad([](CompensatorConfig& c) { c.harmonics = 9; });
     bad([](CompensatorConfig& c) { c.harmonic_memory = 0.0; });
     bad([](CompensatorConfig& c) { c.drift_time_constant = 0.01; });
+    bad([](CompensatorConfig& c) { c.tilt_time_constant = 0.5; });
+    bad([](CompensatorConfig& c) { c.tilt_time_constant = std::numeric_limits<double>::quiet_NaN(); });
     bad([](CompensatorConfig& c) { c.max_gap = -1.0; });
     bad([](CompensatorConfig& c) { c.gravity = 0.0; });
 
