@@ -1,4 +1,5 @@
 #include "periodic_bias_compensation/core/compensator.h"
+#include "periodic_bias_compensation/core/heave_filter.h"
 
 #include <algorithm>
 #include <cmath>
@@ -20,6 +21,8 @@ constexpr std::size_t kFrequencyHistory = 20;
 constexpr double kMaxFrequencySlope = 0.01;
 /// Largest relative change of the frequency extrapolated from the last FFT estimate [-].
 constexpr double kMaxExtrapolation = 0.15;
+/// Time constant of the variances that weigh the broadband heave (broadbandHeave) [s].
+constexpr double kHeaveAveraging = 60.0;
 /// Most Euler steps of the slow-motion observer per sample (stepDefault).
 constexpr int kMaxObserverSteps = 10000;
 /// Highest sample rate planned for [Hz]: a stamp step far below any IMU's period (a driver
@@ -354,6 +357,8 @@ bool CompensatorConfig::validate(std::string* why) const
   check(min_peak_ratio >= 1.0, "min_peak_ratio", ">= 1", min_peak_ratio);
   check(harmonics >= 1 && harmonics <= kMaxHarmonics, "harmonics", "1 .. 4", harmonics);
   check(harmonic_memory >= 0.5, "harmonic_memory", ">= 0.5 s", harmonic_memory);
+  check(heave_corner_frequency >= 0.002 && heave_corner_frequency <= 0.05, "heave_corner_frequency",
+        "0.002 <= Hz <= 0.05 (the wave band must start well above it)", heave_corner_frequency);
   check(drift_time_constant >= 0.5, "drift_time_constant",
         ">= 0.5 s (faster drift removal would follow the waves)", drift_time_constant);
   check(tilt_time_constant >= 2.0 && tilt_time_constant <= 3600.0, "tilt_time_constant",
@@ -387,6 +392,12 @@ struct AxisEstimator
   double frequency_time = 0.0;   ///< centre time of the newest FFT window [s]
   double slow_p = 0.0, slow_v = 0.0, bias = 0.0;
   double residual_variance = 0.0;
+  // Default mode, vertical axis with heave_filter (broadbandHeave): the broadband heave, the
+  // variance of its difference from the harmonic model's, and the white noise variance per sample.
+  HeaveFilter heave;
+  double heave_variance = 0.0;
+  double previous_raw = NAN;
+  double noise_variance = 0.0;
 
   // Paper mode: integrals, period tables, drift terms.
   double paper_v = 0.0, paper_y = 0.0;
@@ -416,7 +427,11 @@ public:
                                 config.min_frequency != config_.min_frequency ||
                                 config.max_frequency != config_.max_frequency ||
                                 config.harmonics != config_.harmonics;
+    const bool restart_heave = config.heave_filter != config_.heave_filter ||
+                               config.heave_corner_frequency != config_.heave_corner_frequency;
     config_ = config;
+    if (restart_heave)
+      axes_[2].heave.setCornerFrequency(config_.heave_corner_frequency);
     if (restart_search && rate_ > 0.0)
     {
       planTrackers(rate_);
@@ -654,6 +669,10 @@ private:
       axis.frequency_slope = 0.0;
       axis.slow_p = axis.slow_v = 0.0;
       axis.residual_variance = 0.0;
+      axis.heave.setCornerFrequency(config_.heave_corner_frequency);
+      axis.heave_variance = 0.0;
+      axis.previous_raw = NAN;
+      axis.noise_variance = 0.0;
       axis.paper_v = axis.paper_y = 0.0;
       axis.d_v = axis.d_p = 0.0;
       axis.v_table.clear();
@@ -976,6 +995,44 @@ private:
     *v_mean = axis.v_sum / std::max(1, window);
   }
 
+  /// Default mode, vertical axis (heave_filter): the harmonic model describes one period; a broad
+  /// sea leaves most of its heave out. The double integral over the whole wave band (HeaveFilter)
+  /// has the accelerometer's white noise through the filter as its error instead. The two are
+  /// blended by inverse variance: their difference D has the variance V_D = V_missed + V_noise
+  /// (over the last minute), V_noise is the filter's noise variance for the noise density
+  /// measured from first differences, and the broadband estimate's weight is
+  /// V_missed / (V_missed + V_noise) = (V_D - V_noise) / V_D. A narrow sea (the bench) leaves
+  /// nothing but noise between them and keeps the harmonic model; a broad one (JONSWAP) gets the
+  /// broadband heave.
+  void broadbandHeave(AxisEstimator& axis, double raw, double dt, double* wave_a, double* wave_x, double* wave_v,
+                      double* weight, double* noise_density)
+  {
+    // The measured acceleration, not the bias-compensated one: the filter's triple zero at DC
+    // and its start correction make a bias harmless, and the bias estimate would close a loop
+    // with the drift observer.
+    const HeaveOutput heave = axis.heave.update(raw, dt);
+    const double difference_x = heave.position - *wave_x;
+    if (dt > 0.0)
+    {
+      const double minute = 1.0 - std::exp(-dt / kHeaveAveraging);
+      // White noise of variance sigma^2 per sample: E[(a_k - a_k-1)^2] = 2 sigma^2 (a wave
+      // changes little in one sample).
+      if (std::isfinite(axis.previous_raw))
+      {
+        const double step = raw - axis.previous_raw;
+        axis.noise_variance += minute * (0.5 * step * step - axis.noise_variance);
+      }
+      axis.heave_variance += minute * (difference_x * difference_x - axis.heave_variance);
+    }
+    axis.previous_raw = raw;
+    *noise_density = 2.0 * axis.noise_variance * (rate_ > 0.0 ? 1.0 / rate_ : 0.0);
+    const double noise = axis.heave.positionVariance(*noise_density);
+    *weight = axis.heave_variance > noise ? (axis.heave_variance - noise) / axis.heave_variance : 0.0;
+    *wave_a += *weight * (heave.acceleration - *wave_a);
+    *wave_x += *weight * difference_x;
+    *wave_v += *weight * (heave.velocity - *wave_v);
+  }
+
   /// Default mode: the periodic acceleration is tracked by a harmonic estimator at the tracked
   /// frequency (its displacement is obtained in closed form, drift free); what is left feeds a
   /// third-order observer whose position is pulled to zero mean with time constant
@@ -1009,6 +1066,10 @@ private:
       const double beta = 1.0 - std::exp(-dt / config_.harmonic_memory);
       axis.residual_variance = (1.0 - beta) * axis.residual_variance + beta * compensated * compensated;
     }
+
+    double heave_weight = 0.0, heave_noise = 0.0;
+    if (i == 2 && config_.heave_filter && config_.enable_periodic)
+      broadbandHeave(axis, raw, dt, &wave_a, &wave_x, &wave_v, &heave_weight, &heave_noise);
 
     const double w = 1.0 / config_.drift_time_constant;
     const double k1 = 3.0 * w, k2 = 3.0 * w * w, k3 = config_.enable_constant ? w * w * w : 0.0;
@@ -1047,8 +1108,13 @@ private:
     const double density = 2.0 * axis.residual_variance * (rate_ > 0.0 ? 1.0 / rate_ : 0.0);
     out->position_variance[i] = density / (32.0 * w * w * w);
     out->velocity_variance[i] = 3.0 * density / (32.0 * w);
-    out->wave_position_variance[i] = axis.residual_variance * variance_factor;
-    out->wave_velocity_variance[i] = axis.residual_variance * velocity_variance_factor;
+    // The blend's variance (broadbandHeave), errors taken as independent.
+    const double harmonic_share = (1.0 - heave_weight) * (1.0 - heave_weight);
+    const double heave_share = heave_weight * heave_weight;
+    out->wave_position_variance[i] = harmonic_share * axis.residual_variance * variance_factor +
+                                     heave_share * axis.heave.positionVariance(heave_noise);
+    out->wave_velocity_variance[i] = harmonic_share * axis.residual_variance * velocity_variance_factor +
+                                     heave_share * axis.heave.velocityVariance(heave_noise);
   }
 
   /// Paper mode, Eq. 1-7 with the decisions of docs/algorithm.md: integrals on the corrected

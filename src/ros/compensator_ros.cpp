@@ -43,6 +43,8 @@ bool applyTuning(const TuningConfig& tuning, CompensatorConfig* config, std::str
   config->harmonics = tuning.harmonics;
   config->harmonic_memory = tuning.harmonic_memory;
   config->drift_time_constant = tuning.drift_time_constant;
+  config->heave_filter = tuning.heave_filter;
+  config->heave_corner_frequency = tuning.heave_corner_frequency;
   config->gyro_attitude = tuning.gyro_attitude;
   config->tilt_time_constant = tuning.tilt_time_constant;
   config->estimate_gyro_bias = tuning.estimate_gyro_bias;
@@ -76,6 +78,8 @@ void toTuning(const CompensatorConfig& config, TuningConfig* tuning)
   tuning->harmonics = config.harmonics;
   tuning->harmonic_memory = config.harmonic_memory;
   tuning->drift_time_constant = config.drift_time_constant;
+  tuning->heave_filter = config.heave_filter;
+  tuning->heave_corner_frequency = config.heave_corner_frequency;
   tuning->gyro_attitude = config.gyro_attitude;
   tuning->tilt_time_constant = config.tilt_time_constant;
   tuning->estimate_gyro_bias = config.estimate_gyro_bias;

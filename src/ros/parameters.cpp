@@ -80,6 +80,9 @@ const std::vector<Key>& keyTable()
     t.push_back({ "harmonics", field<int>([](Parameters* p) { return &p->core.harmonics; }) });
     t.push_back({ "harmonic_memory", field<double>([](Parameters* p) { return &p->core.harmonic_memory; }) });
     t.push_back({ "drift_time_constant", field<double>([](Parameters* p) { return &p->core.drift_time_constant; }) });
+    t.push_back({ "heave_filter", field<bool>([](Parameters* p) { return &p->core.heave_filter; }) });
+    t.push_back({ "heave_corner_frequency",
+                  field<double>([](Parameters* p) { return &p->core.heave_corner_frequency; }) });
     t.push_back({ "gyro_attitude", field<bool>([](Parameters* p) { return &p->core.gyro_attitude; }) });
     t.push_back({ "tilt_time_constant", field<double>([](Parameters* p) { return &p->core.tilt_time_constant; }) });
     t.push_back({ "estimate_gyro_bias", field<bool>([](Parameters* p) { return &p->core.estimate_gyro_bias; }) });

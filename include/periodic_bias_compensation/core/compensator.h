@@ -83,6 +83,10 @@ struct CompensatorConfig
   int harmonics = 2;             ///< harmonics of the dominant frequency tracked (default mode)
   double harmonic_memory = 3.0; ///< time constant of the harmonic estimator [s] (default mode)
   double drift_time_constant = 2.0;  ///< slow-motion drift removal time constant [s] (default)
+  /// Default mode: the vertical wave motion (heave) from the whole wave band (HeaveFilter)
+  /// rather than from the harmonic model of the dominant period.
+  bool heave_filter = true;
+  double heave_corner_frequency = 0.015;  ///< HeaveFilter corner [Hz]
 
   /// Samples without orientation: level them with an attitude integrated from the gyro
   /// (GyroAttitude) rather than with one fixed level frame, which leaks g sin(roll) and
