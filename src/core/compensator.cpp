@@ -396,6 +396,8 @@ struct AxisEstimator
   // variance of its difference from the harmonic model's, and the white noise variance per sample.
   HeaveFilter heave;
   double heave_variance = 0.0;
+  std::array<double, 2> heave_low{};  ///< the heave filter's output below the wave band
+  double heave_low_variance = 0.0;
   double previous_raw = NAN;
   double noise_variance = 0.0;
 
@@ -671,6 +673,8 @@ private:
       axis.residual_variance = 0.0;
       axis.heave.setCornerFrequency(config_.heave_corner_frequency);
       axis.heave_variance = 0.0;
+      axis.heave_low = {};
+      axis.heave_low_variance = 0.0;
       axis.previous_raw = NAN;
       axis.noise_variance = 0.0;
       axis.paper_v = axis.paper_y = 0.0;
@@ -999,8 +1003,9 @@ private:
   /// sea leaves most of its heave out. The double integral over the whole wave band (HeaveFilter)
   /// has the accelerometer's white noise through the filter as its error instead. The two are
   /// blended by inverse variance: their difference D has the variance V_D = V_missed + V_noise
-  /// (over the last minute), V_noise is the filter's noise variance for the noise density
-  /// measured from first differences, and the broadband estimate's weight is
+  /// (over the last minute), V_noise is the filter's error: its variance for the white noise
+  /// density measured from first differences, plus the variance of its output below the wave
+  /// band (no wave is there: bias wander, levelling errors), and the broadband estimate's weight is
   /// V_missed / (V_missed + V_noise) = (V_D - V_noise) / V_D. A narrow sea (the bench) leaves
   /// nothing but noise between them and keeps the harmonic model; a broad one (JONSWAP) gets the
   /// broadband heave.
@@ -1023,10 +1028,17 @@ private:
         axis.noise_variance += minute * (0.5 * step * step - axis.noise_variance);
       }
       axis.heave_variance += minute * (difference_x * difference_x - axis.heave_variance);
+      // The filter's output below the wave band (two first-order low-passes at half the lowest
+      // wave frequency searched: a wave at the band's edge passes with 1/5 of its amplitude,
+      // one at twice it with 1/17): accelerometer bias wander, levelling errors, slow motion.
+      const double low = 1.0 - std::exp(-dt * M_PI * config_.min_frequency);
+      axis.heave_low[0] += low * (heave.position - axis.heave_low[0]);
+      axis.heave_low[1] += low * (axis.heave_low[0] - axis.heave_low[1]);
+      axis.heave_low_variance += minute * (axis.heave_low[1] * axis.heave_low[1] - axis.heave_low_variance);
     }
     axis.previous_raw = raw;
     *noise_density = 2.0 * axis.noise_variance * (rate_ > 0.0 ? 1.0 / rate_ : 0.0);
-    const double noise = axis.heave.positionVariance(*noise_density);
+    const double noise = axis.heave.positionVariance(*noise_density) + axis.heave_low_variance;
     *weight = axis.heave_variance > noise ? (axis.heave_variance - noise) / axis.heave_variance : 0.0;
     *wave_a += *weight * (heave.acceleration - *wave_a);
     *wave_x += *weight * difference_x;
