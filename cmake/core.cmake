@@ -5,7 +5,8 @@ add_library(${PROJECT_NAME}_core
   src/core/calibration_file.cpp
   src/core/gain_tuning.cpp
   src/core/gyro_attitude.cpp
-  src/core/heave_filter.cpp)
+  src/core/heave_filter.cpp
+  src/core/time_base.cpp)
 target_include_directories(${PROJECT_NAME}_core PUBLIC include)
 target_link_libraries(${PROJECT_NAME}_core PUBLIC Eigen3::Eigen PkgConfig::FFTW3 yaml-cpp)
 
@@ -17,6 +18,8 @@ if(CATKIN_ENABLE_TESTING)
     test/core/test_bad_input.cpp
     test/core/test_gain_tuning.cpp
     test/core/test_gyro_attitude.cpp
-    test/core/test_heave_filter.cpp)
+    test/core/test_heave_filter.cpp
+    test/core/test_time_base.cpp
+    test/core/test_real_world_streams.cpp)
   target_link_libraries(test_core ${PROJECT_NAME}_core)
 endif()

@@ -23,6 +23,21 @@ constexpr double kMaxFrequencySlope = 0.01;
 constexpr double kMaxExtrapolation = 0.15;
 /// Time constant of the variances that weigh the broadband heave (broadbandHeave) [s].
 constexpr double kHeaveAveraging = 60.0;
+/// Periods of a held lock the FFT window must span before an estimate 20 % away replaces it.
+constexpr double kResolvePeriods = 10.0;
+/// Time constant with which the model of a changed or lost lock fades out [s].
+constexpr double kFadeTime = 2.0;
+/// Weight below which a fading model is dropped [-].
+constexpr double kFadeEnd = 1e-3;
+/// First-order high-passes at min_frequency on the harmonic model's residual before it is taken
+/// as missed heave (its constant follows a bias drift of a minute's period with a lag that,
+/// doubly integrated, would read as heave): two cut such a drift tenfold.
+constexpr int kResidualStages = 2;
+/// Smallest share of the broadband heave in the wave output; below it, none [-].
+constexpr double kMinHeaveWeight = 0.1;
+/// Time constant with which the broadband heave's weight follows its target [s]: a lock gained or
+/// lost fades it in or out, never steps it.
+constexpr double kWeightTime = 2.0;
 /// Most Euler steps of the slow-motion observer per sample (stepDefault).
 constexpr int kMaxObserverSteps = 10000;
 /// Highest sample rate planned for [Hz]: a stamp step far below any IMU's period (a driver
@@ -301,12 +316,21 @@ std::string toString(SampleStatus status)
       return "rejected: duplicated stamp";
     case SampleStatus::kRejectedOutOfRange:
       return "rejected: acceleration or angular rate out of range";
+    case SampleStatus::kRejectedEarly:
+      return "rejected: stamp far less than a period after the previous one";
+    case SampleStatus::kHeld:
+      return "held: stamp does not continue the stream";
     case SampleStatus::kResetBackwards:
-      return "reset: stamp went backwards";
+      return "reset: stamps went backwards (confirmed)";
     case SampleStatus::kGapReset:
-      return "reset: gap in the samples";
+      return "reset: gap in the samples (confirmed)";
   }
   return "unknown";
+}
+
+std::string toString(OutputState state)
+{
+  return state == OutputState::kCalibrating ? "calibrating (outputs held at zero)" : "tracking";
 }
 
 std::string toString(LevelSource source)
@@ -383,19 +407,33 @@ struct AxisEstimator
   bool locked = false;
   double frequency = 0.0;
 
-  // Default mode: harmonic tracker + third-order drift observer.
+  // Default mode: harmonic tracker + fourth-order drift observer.
   HarmonicEstimator harmonic;
+  bool model_ready = false;  ///< harmonic has described a period: its output is used
+  // The model of a lock that changed or was lost, fading out (retireModel).
+  HarmonicEstimator previous;
+  double previous_frequency = 0.0, previous_phase = 0.0, previous_weight = 0.0;
   double phase = 0.0;
   /// Recent FFT estimates (window centre time [s], frequency [Hz]) for the drift of the period.
   std::deque<std::pair<double, double>> frequency_history;
   double frequency_slope = 0.0;  ///< [Hz/s]
   double frequency_time = 0.0;   ///< centre time of the newest FFT window [s]
   double slow_p = 0.0, slow_v = 0.0, bias = 0.0;
+  double bias_rate = 0.0;  ///< [m/s^3]
   double residual_variance = 0.0;
   // Default mode, vertical axis with heave_filter (broadbandHeave): the broadband heave, the
   // variance of its difference from the harmonic model's, and the white noise variance per sample.
   HeaveFilter heave;
-  double heave_variance = 0.0;
+  struct HighPass
+  {
+    double input = 0.0, output = 0.0;
+  };
+  std::array<HighPass, kResidualStages> residual_high{};  ///< the harmonic model's residual above the band edge
+  HeaveFilter residual_heave;         ///< the residual's displacement
+  double residual_band_variance = 0.0;
+  double residual_samples = 0.0;      ///< in residual_band_variance since the lock
+  double heave_samples = 0.0;         ///< in noise_variance and heave_low_variance
+  double heave_weight = 0.0;          ///< the broadband heave's share of the wave output
   std::array<double, 2> heave_low{};  ///< the heave filter's output below the wave band
   double heave_low_variance = 0.0;
   double previous_raw = NAN;
@@ -406,6 +444,7 @@ struct AxisEstimator
   double d_v = 0.0, d_p = 0.0;
   double constant_d_p = 0.0;  ///< mean velocity of the calibration window [m/s] (Table 1)
   SignalHistory v_table, y_table;
+  SignalHistory raw_history;  ///< default mode: the harmonic model's input over the longest period
   double y_sum = 0.0, v_sum = 0.0;  ///< running sums over the last L samples (outputs)
   int sum_window = 0;
   double time_since_reset = 0.0;
@@ -436,6 +475,7 @@ public:
       axes_[2].heave.setCornerFrequency(config_.heave_corner_frequency);
     if (restart_search && rate_ > 0.0)
     {
+      planned_rate_ = rate_;
       planTrackers(rate_);
       resetMotion();
     }
@@ -468,69 +508,56 @@ public:
       s.orientation.normalize();
     }
 
-    SampleStatus status = SampleStatus::kAccepted;
-    double dt = 0.0;
-    if (has_last_)
+    time_.setMaxGap(config_.max_gap);
+    const StampVerdict verdict = time_.update(s.t);
+    counters_.timing_glitches = time_.glitches();
+    switch (verdict)
     {
-      dt = s.t - last_t_;
-      if (dt == 0.0)
-      {
+      case StampVerdict::kDuplicate:
         ++counters_.rejected_duplicate;
         return SampleStatus::kRejectedDuplicate;
-      }
-      if (dt < 0.0)
-      {
-        ++counters_.resets_backwards;
-        reset();
-        status = SampleStatus::kResetBackwards;
-      }
-      else if (dt > config_.max_gap)
-      {
-        ++counters_.gap_resets;
-        resetMotion();
-        calibration_buffer_.clear();
-        status = SampleStatus::kGapReset;
-      }
+      case StampVerdict::kEarly:
+        ++counters_.rejected_early;
+        return SampleStatus::kRejectedEarly;
+      case StampVerdict::kHeld:
+        ++counters_.held;
+        held_[time_.heldCount() - 1] = s;
+        return SampleStatus::kHeld;
+      case StampVerdict::kAccept:
+        ++counters_.accepted;
+        updateRate();
+        step(s, time_.step(), out);
+        return SampleStatus::kAccepted;
+      case StampVerdict::kRestart:
+      case StampVerdict::kGap:
+        break;
     }
-    if (status == SampleStatus::kAccepted && has_last_)
-      updateRate(dt);
-    if (!has_last_ || status != SampleStatus::kAccepted)
-      dt = 0.0;
-    has_last_ = true;
-    last_t_ = s.t;
-    ++counters_.accepted;
-
-    if (config_.gyro_attitude)
-      attitudeFromGyro(&s, dt);
-    else
-      gyro_levelled_ = false;
-
-    updateLevel(s, dt);
-    CompensatorOutput output;
-    if (needsCalibration())
+    // A confirmed jump: the held samples and this one start a new record.
+    const bool backwards = verdict == StampVerdict::kRestart;
+    if (backwards)
     {
-      calibration_buffer_.push_back({ s, dt });
-      if (calibration_buffer_.size() == 1)
-        calibration_start_ = s.t;
-      if (s.t - calibration_start_ >= config_.calibration_duration && rate_ > 0.0)
-        finishCalibration(&output);
-      else
-        output = process(s, dt);
+      ++counters_.resets_backwards;
+      resetEstimator();
     }
     else
     {
-      output = process(s, dt);
+      ++counters_.gap_resets;
+      resetMotion();
+      calibration_buffer_.clear();
     }
-    if (out)
-      *out = output;
-    return status;
+    counters_.held -= time_.heldCount() - 1;
+    counters_.accepted += time_.heldCount();
+    updateRate();
+    held_[time_.heldCount() - 1] = s;
+    for (int i = 0; i < time_.heldCount(); ++i)
+      step(held_[i], time_.heldStep(i), i + 1 == time_.heldCount() ? out : nullptr);
+    return backwards ? SampleStatus::kResetBackwards : SampleStatus::kGapReset;
   }
 
-  void reset()
+  /// Forgets everything but the time base (a confirmed restart keeps what confirmed it).
+  void resetEstimator()
   {
-    has_last_ = false;
-    rate_ = 0.0;
-    counters_.sample_rate = 0.0;
+    planned_rate_ = 0.0;
     has_level_ = false;
     level_calibrated_ = false;
     level_source_ = LevelSource::kNone;
@@ -544,9 +571,55 @@ public:
       calibrated_ = false;
       constant_bias_.setZero();
     }
-    for (auto& axis : axes_)
-      axis = AxisEstimator();
+    for (int i = 0; i < 3; ++i)
+    {
+      axes_[i] = AxisEstimator();
+      axes_[i].bias = constant_bias_[i];  // zero unless it came from a file
+    }
     resetMotion();
+  }
+
+  /// One sample that continues the record, dt [s] after the previous one (0: the first).
+  void step(ImuSample s, double dt, CompensatorOutput* out)
+  {
+    if (config_.gyro_attitude)
+      attitudeFromGyro(&s, dt);
+    else
+      gyro_levelled_ = false;
+
+    updateLevel(s, dt);
+    CompensatorOutput output;
+    if (needsCalibration())
+    {
+      calibration_buffer_.push_back({ s, dt });
+      if (calibration_buffer_.size() == 1)
+        calibration_start_ = s.t;
+      if (s.t - calibration_start_ >= config_.calibration_duration && planned_rate_ > 0.0)
+      {
+        finishCalibration(&output);
+      }
+      else
+      {
+        // Until the bias and level are known the double integral swings with whatever the
+        // provisional bias leaves: nothing is claimed, the motion is held at zero.
+        output = process(s, dt);
+        holdOutput(&output);
+      }
+    }
+    else
+    {
+      output = process(s, dt);
+    }
+    if (out)
+      *out = output;
+  }
+
+  void reset()
+  {
+    time_.reset();
+    rate_ = 0.0;
+    counters_.sample_rate = 0.0;
+    resetEstimator();
   }
 
   void recalibrate()
@@ -606,6 +679,16 @@ private:
     double dt;
   };
 
+  static void holdOutput(CompensatorOutput* out)
+  {
+    out->state = OutputState::kCalibrating;
+    for (Vector3* v : { &out->position_filtered, &out->velocity_filtered, &out->position_wave, &out->velocity_wave })
+      v->setZero();
+    for (Vector3* v : { &out->position_variance, &out->velocity_variance, &out->wave_position_variance,
+                        &out->wave_velocity_variance })
+      v->setConstant(kHeldVariance);
+  }
+
   bool needsCalibration() const
   {
     const bool need_bias = config_.enable_constant && !calibrated_;
@@ -613,26 +696,26 @@ private:
     return need_bias || need_level;
   }
 
-  void updateRate(double dt)
+  /// The rate from the time base; the FFT windows are planned again only when it moved by more
+  /// than max_rate_change from the rate they were planned for (FrequencyTracker scales its
+  /// frequencies by the rate of its own window's stamps, so a smaller change costs nothing).
+  void updateRate()
   {
-    const double rate = std::min(1.0 / dt, kMaxSampleRate);
-    if (rate_ <= 0.0)
+    rate_ = std::min(time_.rate(), kMaxSampleRate);
+    counters_.sample_rate = rate_;
+    if (rate_ <= 0.0 || !time_.settled())
+      return;
+    if (planned_rate_ <= 0.0)
     {
-      rate_ = rate;
+      planned_rate_ = rate_;
       planTrackers(rate_);
     }
-    else
+    else if (std::abs(rate_ - planned_rate_) > config_.max_rate_change * planned_rate_)
     {
-      // Median-like robustness to single jittered stamps: a slow average of the rate.
-      smoothed_rate_ = smoothed_rate_ > 0.0 ? 0.98 * smoothed_rate_ + 0.02 * rate : rate;
-      if (std::abs(smoothed_rate_ - rate_) > config_.max_rate_change * rate_)
-      {
-        ++counters_.rate_changes;
-        rate_ = smoothed_rate_;
-        planTrackers(rate_);
-      }
+      ++counters_.rate_changes;
+      planned_rate_ = rate_;
+      planTrackers(rate_);
     }
-    counters_.sample_rate = rate_;
   }
 
   void planTrackers(double rate)
@@ -650,6 +733,7 @@ private:
       axis.frequency = 0.0;
       axis.v_table = SignalHistory(table);
       axis.y_table = SignalHistory(table);
+      axis.raw_history = SignalHistory(table);
       axis.sum_window = 0;
     }
     hop_samples_ = std::max(1, static_cast<int>(std::lround(config_.fft_hop * rate)));
@@ -666,13 +750,21 @@ private:
       axis.locked = false;
       axis.frequency = 0.0;
       axis.harmonic.reset(config_.harmonics);
+      axis.model_ready = false;
+      axis.previous_weight = 0.0;
       axis.phase = 0.0;
       axis.frequency_history.clear();
       axis.frequency_slope = 0.0;
       axis.slow_p = axis.slow_v = 0.0;
+      axis.bias_rate = 0.0;
       axis.residual_variance = 0.0;
       axis.heave.setCornerFrequency(config_.heave_corner_frequency);
-      axis.heave_variance = 0.0;
+      axis.residual_high = {};
+      axis.residual_heave.setCornerFrequency(config_.heave_corner_frequency);
+      axis.residual_band_variance = 0.0;
+      axis.residual_samples = 0.0;
+      axis.heave_samples = 0.0;
+      axis.heave_weight = 0.0;
       axis.heave_low = {};
       axis.heave_low_variance = 0.0;
       axis.previous_raw = NAN;
@@ -680,6 +772,7 @@ private:
       axis.paper_v = axis.paper_y = 0.0;
       axis.d_v = axis.d_p = 0.0;
       axis.v_table.clear();
+      axis.raw_history.clear();
       axis.y_table.clear();
       axis.y_sum = axis.v_sum = 0.0;
       axis.sum_window = 0;
@@ -872,7 +965,10 @@ private:
       axis.time_since_reset += dt;
       if (axis.tracker)
       {
-        axis.tracker->push(compensated, s.t);
+        // Default mode: less the calibrated offset only, as the harmonic model (the drift
+        // observer's bias follows acceleration up to about 1 / (2 pi drift_time_constant), and
+        // taking it off would shape the spectrum there).
+        axis.tracker->push(config_.mode == Mode::kDefault ? a[i] - (calibrated_ && config_.enable_constant ? constant_bias_[i] : 0.0) : compensated, s.t);
         if (analyse && config_.enable_periodic)
           updateFrequency(axis);
       }
@@ -891,6 +987,7 @@ private:
       out.acceleration_constant_compensated[i] = a[i] - (config_.enable_constant ? constant_bias_[i] : 0.0);
     }
     out.calibrated = calibrated_;
+    out.state = OutputState::kTracking;
     return out;
   }
 
@@ -917,18 +1014,24 @@ private:
       // A window shorter than three periods of a held lock (seeded at the end of calibration)
       // cannot disprove it yet.
       const bool too_short = axis.locked && axis.tracker->samples() < 3.0 * rate_ / axis.frequency;
+      if (axis.locked && !too_short)
+        retireModel(axis);
       axis.locked = axis.locked && too_short;
       return;
     }
     const bool jump = !axis.locked || std::abs(estimate.frequency - axis.frequency) > 0.2 * axis.frequency;
-    if (jump)
-    {
-      axis.harmonic.reset(config_.harmonics);
-      axis.phase = 0.0;
-      axis.frequency_history.clear();
-    }
+    // Nor can a filling window move a held lock by more than 20 % before it spans kResolvePeriods
+    // of it (its resolution, 1 / span, is then a tenth of the lock's frequency or finer).
+    if (jump && axis.locked && !axis.tracker->full() &&
+        axis.tracker->samples() < kResolvePeriods * rate_ / axis.frequency)
+      return;
     axis.locked = true;
     axis.frequency = estimate.frequency;
+    if (jump)
+    {
+      axis.frequency_history.clear();
+      startModel(axis);
+    }
     axis.frequency_time = now_ - 0.5 * span;
     // Only full windows: while it fills, the interpolation bias changes with the data length and
     // would read as a drift.
@@ -1001,57 +1104,151 @@ private:
 
   /// Default mode, vertical axis (heave_filter): the harmonic model describes one period; a broad
   /// sea leaves most of its heave out. The double integral over the whole wave band (HeaveFilter)
-  /// has the accelerometer's white noise through the filter as its error instead. The two are
-  /// blended by inverse variance: their difference D has the variance V_D = V_missed + V_noise
-  /// (over the last minute), V_noise is the filter's error: its variance for the white noise
-  /// density measured from first differences, plus the variance of its output below the wave
-  /// band (no wave is there: bias wander, levelling errors), and the broadband estimate's weight is
-  /// V_missed / (V_missed + V_noise) = (V_D - V_noise) / V_D. A narrow sea (the bench) leaves
-  /// nothing but noise between them and keeps the harmonic model; a broad one (JONSWAP) gets the
-  /// broadband heave.
-  void broadbandHeave(AxisEstimator& axis, double raw, double dt, double* wave_a, double* wave_x, double* wave_v,
-                      double* weight, double* noise_density)
+  /// has other errors instead: the accelerometer's white noise through the filter, and whatever
+  /// it passes below the wave band (bias wander, levelling errors), which it cannot tell from
+  /// heave. The two are blended by inverse variance:
+  ///  - what the harmonic model misses is measured where bias wander is not: its residual
+  ///    acceleration above min_frequency (kResidualStages first-order high-passes), integrated
+  ///    by a second HeaveFilter, its variance less that of the white noise through both;
+  ///  - the filter's error is the white noise through it plus its output below the wave band
+  ///    (two first-order low-passes at half the lowest wave frequency searched), as averaged or
+  ///    as it is now, whichever is larger (bias wander grows faster than a mean follows).
+  /// The broadband share V_missed / (V_missed + V_filter), zero below kMinHeaveWeight, is followed
+  /// with kWeightTime: a narrow sea (the bench) or none (at rest) keeps the harmonic model
+  /// whatever the bias does; a broad one (JONSWAP) takes the broadband heave.
+  void broadbandHeave(AxisEstimator& axis, double raw, double residual, double dt, double* wave_a, double* wave_x,
+                      double* wave_v, double* weight, double* noise_density)
   {
-    // The measured acceleration, not the bias-compensated one: the filter's triple zero at DC
-    // and its start correction make a bias harmless, and the bias estimate would close a loop
-    // with the drift observer.
-    const HeaveOutput heave = axis.heave.update(raw, dt);
-    const double difference_x = heave.position - *wave_x;
+    // The measured acceleration less the calibrated offset (fixed once calibrated, so no loop with
+    // the drift observer): gravity mismatch and bias are no step into the filter at its start.
+    const HeaveOutput heave = axis.heave.update(raw - (calibrated_ ? constant_bias_[2] : 0.0), dt);
     if (dt > 0.0)
     {
       const double minute = 1.0 - std::exp(-dt / kHeaveAveraging);
       // White noise of variance sigma^2 per sample: E[(a_k - a_k-1)^2] = 2 sigma^2 (a wave
       // changes little in one sample).
+      // Plain means over the first minute, then moving ones (an exponential mean started at
+      // zero would read low for a minute).
+      axis.heave_samples += 1.0;
+      const double average = std::max(minute, 1.0 / axis.heave_samples);
       if (std::isfinite(axis.previous_raw))
       {
         const double step = raw - axis.previous_raw;
-        axis.noise_variance += minute * (0.5 * step * step - axis.noise_variance);
+        axis.noise_variance += average * (0.5 * step * step - axis.noise_variance);
       }
-      axis.heave_variance += minute * (difference_x * difference_x - axis.heave_variance);
-      // The filter's output below the wave band (two first-order low-passes at half the lowest
-      // wave frequency searched: a wave at the band's edge passes with 1/5 of its amplitude,
-      // one at twice it with 1/17): accelerometer bias wander, levelling errors, slow motion.
+      // Only against a locked model (before the first lock the residual is the whole wave): the
+      // residual above the wave band's lower edge (kResidualStages first-order high-passes at
+      // min_frequency), integrated by a copy of the heave filter, its variance a plain mean over
+      // the first minute, then the moving one.
+      if (axis.locked)
+      {
+        const double high = std::exp(-dt * 2.0 * M_PI * config_.min_frequency);
+        double band = residual;
+        for (auto& stage : axis.residual_high)
+        {
+          stage.output = axis.residual_samples > 0.0 ? high * (stage.output + band - stage.input) : 0.0;
+          stage.input = band;
+          band = stage.output;
+        }
+        const double missed = axis.residual_heave.update(band, axis.residual_samples > 0.0 ? dt : 0.0).position;
+        axis.residual_samples += 1.0;
+        axis.residual_band_variance +=
+            std::max(minute, 1.0 / axis.residual_samples) * (missed * missed - axis.residual_band_variance);
+      }
       const double low = 1.0 - std::exp(-dt * M_PI * config_.min_frequency);
-      axis.heave_low[0] += low * (heave.position - axis.heave_low[0]);
-      axis.heave_low[1] += low * (axis.heave_low[0] - axis.heave_low[1]);
-      axis.heave_low_variance += minute * (axis.heave_low[1] * axis.heave_low[1] - axis.heave_low_variance);
+      double below = heave.position;
+      for (double& stage : axis.heave_low)
+        below = stage += low * (below - stage);
+      axis.heave_low_variance += average * (below * below - axis.heave_low_variance);
     }
     axis.previous_raw = raw;
     *noise_density = 2.0 * axis.noise_variance * (rate_ > 0.0 ? 1.0 / rate_ : 0.0);
-    const double noise = axis.heave.positionVariance(*noise_density) + axis.heave_low_variance;
-    *weight = axis.heave_variance > noise ? (axis.heave_variance - noise) / axis.heave_variance : 0.0;
+    double target = 0.0;
+    {
+      // Less the white noise through the high-passes and the filter (about 1 / s^2 there):
+      // n^2 integral of df / (omega^2 + omega_h^2)^2 = n^2 / (8 omega_h^3) for two stages.
+      static_assert(kResidualStages == 2, "the noise floor below is that of two stages");
+      const double omega_h = 2.0 * M_PI * config_.min_frequency;
+      const double missed =
+          std::max(0.0, axis.residual_band_variance - *noise_density / (8.0 * omega_h * omega_h * omega_h));
+      // The filter's output below the band as it is now, when larger than its average: bias
+      // wander grows faster than a minute's mean follows.
+      const double filter = axis.heave.positionVariance(*noise_density) +
+                            std::max(axis.heave_low_variance, axis.heave_low.back() * axis.heave_low.back());
+      target = missed > 0.0 ? missed / (missed + filter) : 0.0;
+      // A share of a few percent gains little and adds that share of everything the filter passes
+      // below the wave band, which can be metres of bias wander.
+      if (target < kMinHeaveWeight)
+        target = 0.0;
+    }
+    if (dt > 0.0)
+      axis.heave_weight += (1.0 - std::exp(-dt / kWeightTime)) * (target - axis.heave_weight);
+    *weight = axis.heave_weight;
     *wave_a += *weight * (heave.acceleration - *wave_a);
-    *wave_x += *weight * difference_x;
+    *wave_x += *weight * (heave.position - *wave_x);
     *wave_v += *weight * (heave.velocity - *wave_v);
+  }
+
+  /// A new lock (or one that moved): the harmonic model starts over at the new frequency, fitted
+  /// at once to its input over the last period (or harmonic_memory, if longer) where that is kept,
+  /// so it describes the wave from the next sample on; the slow channel then never takes a period
+  /// of wave while the model fills.
+  void startModel(AxisEstimator& axis)
+  {
+    retireModel(axis);
+    axis.harmonic.reset(config_.harmonics);
+    axis.phase = 0.0;
+    if (config_.mode != Mode::kDefault || rate_ <= 0.0)
+      return;
+    const double step = 2.0 * M_PI * axis.frequency / rate_;
+    const double lambda = std::exp(-1.0 / (rate_ * config_.harmonic_memory));
+    const int period = static_cast<int>(std::ceil(rate_ / axis.frequency));
+    const int count = std::min(axis.raw_history.size(), std::max(period, static_cast<int>(rate_ * config_.harmonic_memory)));
+    // The newest kept sample (lag 1) is the previous one, at phase 0.
+    for (int lag = count; lag >= 1; --lag)
+      axis.harmonic.update(-(lag - 1) * step, axis.raw_history.ago(lag), lambda);
+  }
+
+  /// A lock that changes or is lost fades its model out rather than dropping it: the model is
+  /// kept, extrapolated at its own frequency, and its weight decays with kFadeTime from the
+  /// change on (not longer: on a broad sea the extrapolation soon loses the wave's phase). The
+  /// wave output never steps.
+  static void retireModel(AxisEstimator& axis)
+  {
+    if (!axis.model_ready)
+      return;
+    axis.previous = axis.harmonic;
+    axis.previous_frequency = axis.frequency;
+    axis.previous_phase = axis.phase;
+    axis.previous_weight = 1.0;
+    axis.model_ready = false;
+  }
+
+  void fadePreviousModel(AxisEstimator& axis, double dt, double* wave_a, double* wave_x, double* wave_v)
+  {
+    if (axis.previous_weight <= 0.0)
+      return;
+    const double omega = 2.0 * M_PI * axis.previous_frequency;
+    axis.previous_phase = std::fmod(axis.previous_phase + omega * dt, 2.0 * M_PI);
+    double a = 0.0, x = 0.0, v = 0.0, unused = 0.0, unused_too = 0.0;
+    axis.previous.evaluate(axis.previous_phase, omega, &a, &x, &v, &unused, &unused_too);
+    const double weight = axis.previous_weight;
+    *wave_a = weight * a + (1.0 - weight) * *wave_a;
+    *wave_x = weight * x + (1.0 - weight) * *wave_x;
+    *wave_v = weight * v + (1.0 - weight) * *wave_v;
+    axis.previous_weight *= std::exp(-dt / kFadeTime);
+    if (axis.previous_weight < kFadeEnd)
+      axis.previous_weight = 0.0;
   }
 
   /// Default mode: the periodic acceleration is tracked by a harmonic estimator at the tracked
   /// frequency (its displacement is obtained in closed form, drift free); what is left feeds a
-  /// third-order observer whose position is pulled to zero mean with time constant
-  /// drift_time_constant, its integral state being the constant bias.
+  /// fourth-order observer whose position is pulled to zero mean with time constant
+  /// drift_time_constant, its integral states being the bias and its rate of change.
   void stepDefault(AxisEstimator& axis, double raw, double compensated, double dt, int i, CompensatorOutput* out)
   {
     double wave_a = 0.0, wave_x = 0.0, wave_v = 0.0, variance_factor = 0.0, velocity_variance_factor = 0.0;
+    double residual = compensated;  // what the harmonic model leaves of the acceleration
     if (axis.locked && config_.enable_periodic)
     {
       // The FFT reports the frequency at the centre of its window; a drifting encounter
@@ -1065,32 +1262,49 @@ private:
       const double omega = 2.0 * M_PI * frequency;
       axis.phase = std::fmod(axis.phase + omega * dt, 2.0 * M_PI);
       const double lambda = std::exp(-dt / config_.harmonic_memory);
-      const double residual = axis.harmonic.update(axis.phase, compensated, lambda);
+      // Fitted to the acceleration less the calibrated offset, not less the drift observer's
+      // moving bias: the model's own constant follows slow bias, and the observer's bias, which
+      // follows acceleration up to about 1 / (2 pi drift_time_constant), stays out of its residual.
+      residual = axis.harmonic.update(axis.phase, raw - (calibrated_ ? constant_bias_[i] : 0.0), lambda);
+      axis.raw_history.push(raw - (calibrated_ ? constant_bias_[i] : 0.0));
       const double beta = 1.0 - lambda;
       axis.residual_variance = (1.0 - beta) * axis.residual_variance + beta * residual * residual;
       // A fit of less than one period is not yet a description of the oscillation.
       if (axis.harmonic.updates() >= rate_ / frequency)
+      {
         axis.harmonic.evaluate(axis.phase, omega, &wave_a, &wave_x, &wave_v, &variance_factor,
                                &velocity_variance_factor);
+        axis.model_ready = true;
+      }
     }
-    else if (dt > 0.0)
+    else
     {
-      const double beta = 1.0 - std::exp(-dt / config_.harmonic_memory);
-      axis.residual_variance = (1.0 - beta) * axis.residual_variance + beta * compensated * compensated;
+      axis.raw_history.push(raw - (calibrated_ ? constant_bias_[i] : 0.0));
+      if (dt > 0.0)
+      {
+        const double beta = 1.0 - std::exp(-dt / config_.harmonic_memory);
+        axis.residual_variance = (1.0 - beta) * axis.residual_variance + beta * compensated * compensated;
+      }
     }
+    fadePreviousModel(axis, dt, &wave_a, &wave_x, &wave_v);
 
     double heave_weight = 0.0, heave_noise = 0.0;
     if (i == 2 && config_.heave_filter && config_.enable_periodic)
-      broadbandHeave(axis, raw, dt, &wave_a, &wave_x, &wave_v, &heave_weight, &heave_noise);
+      broadbandHeave(axis, raw, residual, dt, &wave_a, &wave_x, &wave_v, &heave_weight, &heave_noise);
 
+    // Fourth-order observer, poles at -w (characteristic (s + w)^4): position, velocity, the
+    // bias and its rate. p / a = s^2 / (s + w)^4, so a constant bias and one that changes at a
+    // steady rate (a slow drift, a long-period wander between its turns) leave no position error.
     const double w = 1.0 / config_.drift_time_constant;
-    const double k1 = 3.0 * w, k2 = 3.0 * w * w, k3 = config_.enable_constant ? w * w * w : 0.0;
+    const double k1 = 4.0 * w, k2 = 6.0 * w * w;
+    const double k3 = config_.enable_constant ? 4.0 * w * w * w : 0.0;
+    const double k4 = config_.enable_constant ? w * w * w * w : 0.0;
     const double bias = config_.enable_constant ? axis.bias : 0.0;
     // This Euler step of the observer is stable only while dt < 0.55 drift_time_constant: a longer
-    // step (a slow IMU, a short gap) is split into steps of at most a quarter of it (F9: 0.59 s
+    // step (a slow IMU, a short gap) is split into steps of at most a quarter of it (0.59 s
     // samples with a 0.5 s constant grew the bias x7 per sample). Past kMaxObserverSteps the slow
     // motion starts again, as after a gap.
-    const double split = std::ceil(w * dt / 0.25);
+    const double split = std::ceil(w * dt / 0.1);
     if (split > kMaxObserverSteps)
     {
       axis.slow_p = axis.slow_v = 0.0;
@@ -1104,7 +1318,10 @@ private:
         axis.slow_v += (raw - wave_a - (config_.enable_constant ? axis.bias : 0.0) - k2 * axis.slow_p) * h;
         axis.slow_p += (axis.slow_v - k1 * axis.slow_p) * h;
         if (calibrated_ && config_.enable_constant)
-          axis.bias += k3 * axis.slow_p * h;
+        {
+          axis.bias += (k3 * axis.slow_p + axis.bias_rate) * h;
+          axis.bias_rate += k4 * axis.slow_p * h;
+        }
       }
     }
     axis.d_v = -(bias + k2 * axis.slow_p) * dt;
@@ -1116,10 +1333,10 @@ private:
     out->velocity_wave[i] = wave_v;
     out->axes[i].periodic_bias = wave_a;
     // White acceleration noise of one-sided density n^2 = 2 sigma^2 dt through the observer:
-    // var(p) = n^2 / (32 w^3), var(v) = 3 n^2 / (32 w) (closed form for a triple pole at -w).
+    // var(p) = n^2 / (64 w^3), var(v) = 5 n^2 / (64 w) (closed forms for a quadruple pole at -w).
     const double density = 2.0 * axis.residual_variance * (rate_ > 0.0 ? 1.0 / rate_ : 0.0);
-    out->position_variance[i] = density / (32.0 * w * w * w);
-    out->velocity_variance[i] = 3.0 * density / (32.0 * w);
+    out->position_variance[i] = density / (64.0 * w * w * w);
+    out->velocity_variance[i] = 5.0 * density / (64.0 * w);
     // The blend's variance (broadbandHeave), errors taken as independent.
     const double harmonic_share = (1.0 - heave_weight) * (1.0 - heave_weight);
     const double heave_share = heave_weight * heave_weight;
@@ -1186,10 +1403,10 @@ private:
   CompensatorConfig config_;
   CompensatorCounters counters_;
   std::array<AxisEstimator, 3> axes_;
-  bool has_last_ = false;
-  double last_t_ = 0.0;
-  double rate_ = 0.0;
-  double smoothed_rate_ = 0.0;
+  TimeBase time_;
+  std::array<ImuSample, kConfirmSamples> held_;  ///< samples held while a jump is confirmed
+  double rate_ = 0.0;          ///< sample rate [Hz] (time_)
+  double planned_rate_ = 0.0;  ///< rate the FFT windows were planned for [Hz]
   int hop_samples_ = 1;
   int since_analysis_ = 0;
   double now_ = 0.0;  ///< time of the sample being processed [s]

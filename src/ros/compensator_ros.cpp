@@ -255,7 +255,12 @@ void CompensatorRos::imuCallback(const sensor_msgs::Imu::ConstPtr& msg)
     case SampleStatus::kRejectedBadQuaternion:
     case SampleStatus::kRejectedDuplicate:
     case SampleStatus::kRejectedOutOfRange:
+    case SampleStatus::kRejectedEarly:
       ROS_WARN_THROTTLE(kWarnPeriod, "imu/data: sample at t = %.3f s dropped: %s", sample.t, toString(status).c_str());
+      return;
+    case SampleStatus::kHeld:
+      ROS_WARN_THROTTLE(kWarnPeriod, "imu/data: stamp t = %.3f s does not continue the stream: held until %d samples "
+                        "confirm the jump, dropped if the stream goes on", sample.t, kConfirmSamples);
       return;
     case SampleStatus::kResetBackwards:
       ROS_WARN_THROTTLE(kWarnPeriod, "imu/data: stamp went backwards (t = %.3f s): estimator and paths reset",
@@ -534,6 +539,7 @@ void CompensatorRos::diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat)
   count(since(core.rejected_non_finite, diag_core_prev_.rejected_non_finite), "non-finite");
   count(since(core.rejected_bad_quaternion, diag_core_prev_.rejected_bad_quaternion), "bad quaternion");
   count(since(core.rejected_duplicate, diag_core_prev_.rejected_duplicate), "duplicate stamp");
+  count(since(core.timing_glitches, diag_core_prev_.timing_glitches), "stamp glitch (early or out of order)");
   count(since(counters_.rejected_wrong_frame, diag_wrapper_prev_.rejected_wrong_frame), "wrong frame_id");
   count(since(counters_.rejected_out_of_range, diag_wrapper_prev_.rejected_out_of_range),
         "acceleration or angular rate out of range");
@@ -619,6 +625,7 @@ void CompensatorRos::diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat)
   stat.add("rejected non-finite", core.rejected_non_finite);
   stat.add("rejected bad quaternion", core.rejected_bad_quaternion);
   stat.add("rejected duplicate stamp", core.rejected_duplicate);
+  stat.add("dropped stamp glitches", core.timing_glitches);
   stat.add("rejected wrong frame", counters_.rejected_wrong_frame);
   stat.add("dropped waiting for mounting", counters_.waiting_for_mounting);
   stat.add("backwards resets", core.resets_backwards);

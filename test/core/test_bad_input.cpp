@@ -111,8 +111,9 @@ TEST(BadInput, DuplicatedStampIsDropped)
 
 TEST(BadInput, StampsGoingBackwardsResetCleanly)
 {
-  // A bag replayed with --loop: the second pass must give what a fresh compensator gives, with
-  // and without orientation in the messages (then the level is measured again too).
+  // A bag replayed with --loop: the jump back is confirmed by kConfirmSamples samples (held until
+  // then, then processed), and the second pass gives what a fresh compensator gives, with and
+  // without orientation in the messages (then the level is measured again too).
   for (bool with_orientation : { true, false })
   {
     pbc::test::Shake shake;
@@ -122,10 +123,18 @@ TEST(BadInput, StampsGoingBackwardsResetCleanly)
     Compensator looped, fresh;
     feed(looped, r, 0, r.samples.size());
     CompensatorOutput out_looped, out_fresh;
-    EXPECT_EQ(looped.addSample(r.samples[0], &out_looped), SampleStatus::kResetBackwards);
+    for (int k = 0; k + 1 < pbc::kConfirmSamples; ++k)
+    {
+      EXPECT_EQ(looped.addSample(r.samples[k], &out_looped), SampleStatus::kHeld);
+      fresh.addSample(r.samples[k], &out_fresh);
+    }
+    EXPECT_EQ(looped.counters().resets_backwards, 0u) << "not confirmed yet";
+    const std::size_t last_held = pbc::kConfirmSamples - 1;
+    EXPECT_EQ(looped.addSample(r.samples[last_held], &out_looped), SampleStatus::kResetBackwards);
+    fresh.addSample(r.samples[last_held], &out_fresh);
     EXPECT_EQ(looped.counters().resets_backwards, 1u);
-    fresh.addSample(r.samples[0], &out_fresh);
-    for (std::size_t k = 1; k < r.samples.size(); ++k)
+    EXPECT_EQ(looped.counters().timing_glitches, 0u);
+    for (std::size_t k = last_held + 1; k < r.samples.size(); ++k)
     {
       looped.addSample(r.samples[k], &out_looped);
       fresh.addSample(r.samples[k], &out_fresh);
@@ -143,14 +152,59 @@ TEST(BadInput, LongGapResetsTheIntegrationButKeepsTheBias)
   ASSERT_TRUE(c.calibrated());
   const Vector3 bias = c.constantBias();
   CompensatorOutput out;
-  pbc::ImuSample late = r.samples[2000];
-  late.t += 5.0;  // 5 s of missing samples, far over max_gap
-  EXPECT_EQ(c.addSample(late, &out), SampleStatus::kGapReset);
+  // 5 s of missing samples, far over max_gap: confirmed by kConfirmSamples samples.
+  for (int k = 0; k < pbc::kConfirmSamples; ++k)
+  {
+    pbc::ImuSample late = r.samples[2000 + k];
+    late.t += 5.0;
+    EXPECT_EQ(c.addSample(late, &out), k + 1 < pbc::kConfirmSamples ? SampleStatus::kHeld : SampleStatus::kGapReset);
+  }
   EXPECT_EQ(c.counters().gap_resets, 1u);
   EXPECT_TRUE(c.calibrated());
-  EXPECT_NEAR((c.constantBias() - bias).norm(), 0.0, 1e-9);
-  EXPECT_NEAR(out.position_filtered.norm(), 0.0, 1e-6) << "integration restarts from the gap";
-  feed(c, r, 2001, 500, 5.0);
+  EXPECT_NEAR((c.constantBias() - bias).norm(), 0.0, 1e-4) << "four samples' worth of bias tracking at most";
+  // Four steps of the shaken motion since the gap (at most 0.5 x 0.39 m/s^2 x (4 / 87.7 s)^2).
+  EXPECT_LT(out.position_filtered.norm(), 5e-4) << "integration restarts from the gap";
+  feed(c, r, 2000 + pbc::kConfirmSamples, 500, 5.0);
+}
+
+TEST(BadInput, LoneTimingGlitchesAreDroppedNotAReset)
+{
+  // Common driver glitches, each alone in the stream: a stamp 5 s in the past, a stamp of 0, one
+  // 5 s in the future, one 1 ms after its predecessor. Each is dropped and counted; the estimate
+  // afterwards is the same as that of the stream with that sample missing.
+  const auto r = record();
+  struct Glitch
+  {
+    const char* name;
+    double stamp;
+    SampleStatus status;
+  };
+  for (const Glitch& g : { Glitch{ "5 s in the past", r.samples[2000].t - 5.0, SampleStatus::kHeld },
+                           Glitch{ "stamped 0", 0.0, SampleStatus::kHeld },
+                           Glitch{ "5 s in the future", r.samples[2000].t + 5.0, SampleStatus::kHeld },
+                           Glitch{ "1 ms after its predecessor", r.samples[1999].t + 0.001,
+                                   SampleStatus::kRejectedEarly } })
+  {
+    Compensator glitched, clean;
+    feed(glitched, r, 0, 2000);
+    feed(clean, r, 0, 2000);
+    pbc::ImuSample bad = r.samples[2000];
+    bad.t = g.stamp;
+    EXPECT_EQ(glitched.addSample(bad, nullptr), g.status) << g.name;
+    CompensatorOutput out_glitched, out_clean;
+    for (std::size_t k = 2001; k < r.samples.size(); ++k)
+    {
+      ASSERT_EQ(glitched.addSample(r.samples[k], &out_glitched), SampleStatus::kAccepted) << g.name;
+      clean.addSample(r.samples[k], &out_clean);
+    }
+    EXPECT_EQ(glitched.counters().timing_glitches, 1u) << g.name;
+    EXPECT_EQ(glitched.counters().resets_backwards + glitched.counters().gap_resets, 0u) << g.name;
+    EXPECT_NEAR(glitched.counters().sample_rate, 87.7, 1e-6) << g.name;
+    EXPECT_TRUE(glitched.calibrated()) << g.name;
+    EXPECT_NEAR((glitched.constantBias() - clean.constantBias()).norm(), 0.0, 1e-9) << g.name;
+    EXPECT_NEAR((out_glitched.position_filtered - out_clean.position_filtered).norm(), 0.0, 1e-9) << g.name;
+    EXPECT_NEAR((out_glitched.position_wave - out_clean.position_wave).norm(), 0.0, 1e-9) << g.name;
+  }
 }
 
 TEST(BadInput, ShortGapIsIntegratedAcross)
@@ -426,6 +480,8 @@ TEST(BadInput, SlowImuAgainstAShortDriftConstantStaysBounded)
   {
     ASSERT_EQ(c.addSample(s, &out), SampleStatus::kAccepted);
     ASSERT_TRUE(finiteOutput(out)) << "t = " << s.t;
-    ASSERT_LT(c.constantBias().norm(), 1.0) << "t = " << s.t;
+    // Bounded by the shake's acceleration (0.57 m/s^2 on x): at this drift_time_constant the
+    // observer's bias follows a 0.17 Hz motion that is not locked.
+    ASSERT_LT(c.constantBias().norm(), 2.0) << "t = " << s.t;
   }
 }

@@ -297,9 +297,10 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   }
 
   const pbc::CompensatorCounters& k = c->counters();
-  // Resets and gap restarts are accepted samples too (counted in both).
+  // Resets and gap restarts are accepted samples too (counted in both); samples held for a jump
+  // that was then confirmed are counted as accepted, those dropped as held.
   const std::uint64_t counted = k.accepted + k.rejected_non_finite + k.rejected_bad_quaternion +
-                                k.rejected_duplicate + k.rejected_out_of_range;
+                                k.rejected_duplicate + k.rejected_out_of_range + k.rejected_early + k.held;
   if (counted != handed)
   {
     pbc_fuzz::fail("counters do not add up: " + std::to_string(counted) + " counted, " + std::to_string(handed) +

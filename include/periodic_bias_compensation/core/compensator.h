@@ -16,6 +16,7 @@
 
 #include "periodic_bias_compensation/core/frequency_tracker.h"
 #include "periodic_bias_compensation/core/gyro_attitude.h"
+#include "periodic_bias_compensation/core/time_base.h"
 
 namespace periodic_bias_compensation
 {
@@ -97,7 +98,7 @@ struct CompensatorConfig
   bool estimate_gyro_bias = true;    ///< GyroAttitudeConfig::estimate_bias
 
   double gravity = kStandardGravity;  ///< local gravity magnitude [m/s^2]
-  double max_gap = 0.5;          ///< a gap longer than this resets the integration [s]
+  double max_gap = 0.5;          ///< a confirmed gap longer than this resets the integration [s]
   double max_rate_change = 0.2;  ///< relative sample-rate change that re-plans the FFT [-]
   double max_quaternion_norm_error = 0.01;  ///< |1 - |q|| above this rejects the sample [-]
 
@@ -153,8 +154,12 @@ enum class SampleStatus
   kRejectedBadQuaternion,  ///< zero or non-unit orientation: dropped
   kRejectedDuplicate,      ///< same stamp as the previous sample: dropped
   kRejectedOutOfRange,     ///< finite but beyond kMaxSpecificForce / kMaxAngularRate: dropped
-  kResetBackwards,         ///< stamp went backwards (bag loop): state reset, sample starts anew
-  kGapReset,               ///< gap longer than max_gap: integration reset, sample starts anew
+  kRejectedEarly,          ///< stamp far less than a period after the previous one: dropped
+  kHeld,                   ///< stamp does not continue the stream: held until the jump is
+                           ///< confirmed (then processed) or the stream goes on (then dropped)
+  kResetBackwards,         ///< confirmed jump backwards (bag loop): state reset, the held samples
+                           ///< and this one start anew
+  kGapReset,               ///< confirmed gap longer than max_gap: integration reset, likewise
 };
 std::string toString(SampleStatus status);
 /// True when addSample filled its output for this sample (accepted, or accepted after a reset).
@@ -164,10 +169,22 @@ inline bool producedOutput(SampleStatus status)
          status == SampleStatus::kResetBackwards;
 }
 
+/// How far an output can be trusted.
+enum class OutputState
+{
+  kCalibrating,  ///< calibration window running: positions and velocities held at zero, their
+                 ///< variances kHeldVariance
+  kTracking,     ///< calibrated: the estimates and their variances are the estimator's
+};
+std::string toString(OutputState state);
+/// Variance given to outputs held at zero while calibrating [m^2, m^2/s^2].
+constexpr double kHeldVariance = 1e6;
+
 /// Output for one accepted sample, level ENU frame.
 struct CompensatorOutput
 {
   double t = 0.0;
+  OutputState state = OutputState::kCalibrating;
   Vector3 position_filtered{ 0, 0, 0 };  ///< slow motion, drift and wave removed [m]
   Vector3 velocity_filtered{ 0, 0, 0 };  ///< [m/s]
   Vector3 position_wave{ 0, 0, 0 };      ///< wave (periodic) motion about the slow motion [m]
@@ -193,10 +210,13 @@ struct CompensatorCounters
   std::uint64_t rejected_bad_quaternion = 0;
   std::uint64_t rejected_duplicate = 0;
   std::uint64_t rejected_out_of_range = 0;
+  std::uint64_t rejected_early = 0;
+  std::uint64_t held = 0;            ///< samples held while a jump in the stamps was confirmed
+  std::uint64_t timing_glitches = 0; ///< lone stamps dropped: early, or held and then discarded
   std::uint64_t resets_backwards = 0;
   std::uint64_t gap_resets = 0;
   std::uint64_t rate_changes = 0;
-  double sample_rate = 0.0;  ///< current estimate [Hz]
+  double sample_rate = 0.0;  ///< current estimate [Hz] (TimeBase: line fit of the stamps)
 };
 
 class CompensatorImpl;
