@@ -53,6 +53,9 @@ if(CATKIN_ENABLE_TESTING)
   add_rostest_gtest(test_bad_input test/ros/bad_input.test test/ros/bad_input.cpp)
   target_link_libraries(test_bad_input ${catkin_LIBRARIES})
   add_dependencies(test_bad_input ${PROJECT_NAME}_generate_messages_cpp)
+  add_rostest_gtest(test_input_sanity test/ros/input_sanity.test test/ros/input_sanity.cpp)
+  target_link_libraries(test_input_sanity ${catkin_LIBRARIES})
+  add_dependencies(test_input_sanity ${PROJECT_NAME}_generate_messages_cpp)
 
   # Invalid start-up parameters stop the node and the nodelet.
   add_rostest_gtest(test_bad_params test/ros/bad_params.test test/ros/bad_params.cpp)

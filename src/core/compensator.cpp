@@ -311,7 +311,7 @@ std::string toString(SampleStatus status)
     case SampleStatus::kRejectedNonFinite:
       return "rejected: NaN or Inf in a field";
     case SampleStatus::kRejectedBadQuaternion:
-      return "rejected: zero or non-unit orientation quaternion";
+      return "rejected: non-unit orientation quaternion";
     case SampleStatus::kRejectedDuplicate:
       return "rejected: duplicated stamp";
     case SampleStatus::kRejectedOutOfRange:
@@ -324,6 +324,22 @@ std::string toString(SampleStatus status)
       return "reset: stamps went backwards (confirmed)";
     case SampleStatus::kGapReset:
       return "reset: gap in the samples (confirmed)";
+  }
+  return "unknown";
+}
+
+std::string toString(ForceUnits units)
+{
+  switch (units)
+  {
+    case ForceUnits::kUnknown:
+      return "not known yet";
+    case ForceUnits::kPlausible:
+      return "m/s^2";
+    case ForceUnits::kLooksLikeG:
+      return "looks like g, not m/s^2";
+    case ForceUnits::kImplausible:
+      return "implausible (neither m/s^2 nor g)";
   }
   return "unknown";
 }
@@ -497,6 +513,12 @@ public:
       return SampleStatus::kRejectedOutOfRange;
     }
     ImuSample s = sample;
+    if (s.has_orientation && s.orientation.coeffs().isZero(0.0))
+    {
+      // IMUs without an AHRS often fill the quaternion with zeros instead of flagging it absent.
+      ++counters_.zero_orientation;
+      s.has_orientation = false;
+    }
     if (s.has_orientation)
     {
       const double norm = s.orientation.norm();
@@ -510,6 +532,8 @@ public:
 
     time_.setMaxGap(config_.max_gap);
     const StampVerdict verdict = time_.update(s.t);
+    if (verdict != StampVerdict::kDuplicate && verdict != StampVerdict::kEarly)
+      noteSpecificForce(s.specific_force.norm());
     counters_.timing_glitches = time_.glitches();
     switch (verdict)
     {
@@ -552,6 +576,21 @@ public:
     for (int i = 0; i < time_.heldCount(); ++i)
       step(held_[i], time_.heldStep(i), i + 1 == time_.heldCount() ? out : nullptr);
     return backwards ? SampleStatus::kResetBackwards : SampleStatus::kGapReset;
+  }
+
+  ForceUnits forceUnits() const
+  {
+    if (force_time_ < kUnitsSettle)
+      return ForceUnits::kUnknown;
+    if (std::abs(mean_force_ - config_.gravity) < 0.25 * config_.gravity)
+      return ForceUnits::kPlausible;
+    if (std::abs(mean_force_ - 1.0) < 0.25)
+      return ForceUnits::kLooksLikeG;
+    return ForceUnits::kImplausible;
+  }
+  double meanSpecificForce() const
+  {
+    return mean_force_;
   }
 
   /// Forgets everything but the time base (a confirmed restart keeps what confirmed it).
@@ -617,6 +656,7 @@ public:
   void reset()
   {
     time_.reset();
+    mean_force_ = force_time_ = force_samples_ = 0.0;
     rate_ = 0.0;
     counters_.sample_rate = 0.0;
     resetEstimator();
@@ -694,6 +734,16 @@ private:
     const bool need_bias = config_.enable_constant && !calibrated_;
     const bool need_level = !level_calibrated_ && !last_had_orientation_;
     return need_bias || need_level;
+  }
+
+  /// Mean |specific force| over kUnitsAveraging (a plain mean until then), by the period.
+  void noteSpecificForce(double magnitude)
+  {
+    const double period = time_.period() > 0.0 ? time_.period() : 0.0;
+    force_time_ += period;
+    ++force_samples_;
+    const double weight = std::max(1.0 - std::exp(-period / kUnitsAveraging), 1.0 / force_samples_);
+    mean_force_ += weight * (magnitude - mean_force_);
   }
 
   /// The rate from the time base; the FFT windows are planned again only when it moved by more
@@ -1404,6 +1454,9 @@ private:
   CompensatorCounters counters_;
   std::array<AxisEstimator, 3> axes_;
   TimeBase time_;
+  double mean_force_ = 0.0;   ///< mean |specific force| (noteSpecificForce) [m/s^2]
+  double force_time_ = 0.0;   ///< data behind it [s]
+  double force_samples_ = 0.0;
   std::array<ImuSample, kConfirmSamples> held_;  ///< samples held while a jump is confirmed
   double rate_ = 0.0;          ///< sample rate [Hz] (time_)
   double planned_rate_ = 0.0;  ///< rate the FFT windows were planned for [Hz]
@@ -1478,6 +1531,14 @@ LevelSource Compensator::levelSource() const
 Vector3 Compensator::gyroBias() const
 {
   return impl_->gyroBias();
+}
+ForceUnits Compensator::forceUnits() const
+{
+  return impl_->forceUnits();
+}
+double Compensator::meanSpecificForce() const
+{
+  return impl_->meanSpecificForce();
 }
 const CompensatorCounters& Compensator::counters() const
 {

@@ -19,6 +19,8 @@ namespace periodic_bias_compensation
 namespace
 {
 constexpr double kWarnPeriod = 5.0;  ///< throttle of hot-path warnings [s]
+/// Input arriving with nothing published for this long is an ERROR in diagnostics [s].
+constexpr double kNoOutputTime = 1.0;
 const char* const kAxisNames[3] = { "x", "y", "z" };
 
 /// Copies the run-time tunable fields of a reconfigure request into a core config.
@@ -208,6 +210,10 @@ void CompensatorRos::imuCallback(const sensor_msgs::Imu::ConstPtr& msg)
   boost::recursive_mutex::scoped_lock lock(mutex_);
   ++counters_.received;
   last_receive_ = ros::Time::now();
+  if (counters_.received == 1)
+  {
+    first_receive_ = last_receive_;
+  }
 
   if (!frame_filter_.accept(msg->header.frame_id))
   {
@@ -216,10 +222,6 @@ void CompensatorRos::imuCallback(const sensor_msgs::Imu::ConstPtr& msg)
                                    " so far)",
                       msg->header.frame_id.c_str(), frame_filter_.expected().c_str(), counters_.rejected_wrong_frame);
     return;
-  }
-  if (counters_.received == 1 && params_.ros.imu_frame.empty())
-  {
-    updater_->setHardwareID(frame_filter_.expected());
   }
   if (!updateMounting(*msg))
   {
@@ -237,12 +239,28 @@ void CompensatorRos::imuCallback(const sensor_msgs::Imu::ConstPtr& msg)
     return;
   }
   CompensatorOutput out;
+  const std::uint64_t zero_orientation = compensator_->counters().zero_orientation;
   const SampleStatus status = compensator_->addSample(sample, &out);
+  if (zero_orientation == 0 && compensator_->counters().zero_orientation > 0)
+  {
+    ROS_WARN("imu/data: all-zero orientation quaternion without the covariance -1 flag: taken as no orientation");
+  }
   if (producedOutput(status))
   {
-    has_orientation_ = sample.has_orientation;
-    seen_orientation_ = seen_orientation_ || sample.has_orientation;
-    if (!sample.has_orientation)
+    if (!frame_filter_.known())
+    {
+      frame_filter_.learn(msg->header.frame_id);
+      if (frame_filter_.known())
+      {
+        updater_->setHardwareID(frame_filter_.expected());
+      }
+    }
+    // An all-zero quaternion counts as none (the core takes it so).
+    const bool with_orientation =
+        sample.has_orientation && compensator_->counters().zero_orientation == zero_orientation;
+    has_orientation_ = with_orientation;
+    seen_orientation_ = seen_orientation_ || with_orientation;
+    if (!with_orientation)
     {
       ++counters_.without_orientation;
     }
@@ -282,13 +300,13 @@ bool CompensatorRos::updateMounting(const sensor_msgs::Imu& msg)
   {
     if (mounting_state_ == MountingState::kFallback)
     {
-      ROS_WARN_THROTTLE(60.0, "no transform %s -> %s: using the identity as IMU mounting",
+      ROS_WARN_DELAYED_THROTTLE(60.0, "no transform %s -> %s: using the identity as IMU mounting",
                         msg.header.frame_id.c_str(), params_.ros.base_frame.c_str());
     }
     return true;
   }
   const std::string& imu_frame = msg.header.frame_id;
-  if (imu_frame == params_.ros.base_frame)
+  if (imu_frame == params_.ros.base_frame || params_.ros.identity_mounting)
   {
     mounting_state_ = MountingState::kIdentity;
     return true;
@@ -358,6 +376,7 @@ void CompensatorRos::publishOutputs(const sensor_msgs::Imu& msg, const Compensat
     tf_broadcaster_->sendTransform(tf);
   }
   has_output_ = true;
+  last_publish_ = ros::Time::now();
   last_output_ = out;
   // Raw track: the gravity-free level acceleration with only the calibrated constant bias
   // removed (CompensatorOutput::acceleration_constant_compensated), integrated twice here.
@@ -487,6 +506,29 @@ bool CompensatorRos::saveCalibration(std_srvs::Trigger::Request& /*req*/, std_sr
   return true;
 }
 
+void CompensatorRos::diagnoseInput(const ros::Time& now,
+                                   const std::function<void(std::uint8_t, const std::string&)>& raise) const
+{
+  using diagnostic_msgs::DiagnosticStatus;
+  const ForceUnits units = compensator_->forceUnits();
+  if (units == ForceUnits::kLooksLikeG || units == ForceUnits::kImplausible)
+  {
+    char text[200];
+    std::snprintf(text, sizeof text, "mean specific force %.3f against gravity %.3f m/s^2: %s", compensator_->meanSpecificForce(),
+                  compensator_->config().gravity, toString(units).c_str());
+    raise(DiagnosticStatus::ERROR, text);
+  }
+  // Input arriving while nothing is published: every sample refused, or held for a jump.
+  const double receiving = (now - last_receive_).toSec();
+  const double quiet = (now - (has_output_ ? last_publish_ : first_receive_)).toSec();
+  if (counters_.received > 0 && receiving < kNoOutputTime && quiet > kNoOutputTime)
+  {
+    char text[120];
+    std::snprintf(text, sizeof text, "imu/data arrives but nothing was published for %.1f s", quiet);
+    raise(DiagnosticStatus::ERROR, text);
+  }
+}
+
 void CompensatorRos::diagnosticTimer(const ros::TimerEvent& /*event*/)
 {
   boost::recursive_mutex::scoped_lock lock(mutex_);
@@ -524,6 +566,7 @@ void CompensatorRos::diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat)
       raise(DiagnosticStatus::ERROR, m.str());
     }
   }
+  diagnoseInput(now, raise);
   const std::uint64_t bad_outputs = since(counters_.nonfinite_outputs, diag_wrapper_prev_.nonfinite_outputs);
   if (bad_outputs > 0)
   {
@@ -594,7 +637,8 @@ void CompensatorRos::diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat)
   }
   if (counters_.received > 0 && !compensator_->calibrated())
   {
-    raise(DiagnosticStatus::WARN, "calibrating constant bias");
+    // Normal at start-up: shown, not raised.
+    messages.push_back("calibrating constant bias (odometry held at zero meanwhile)");
   }
   // Period search: "no period" is normal on a calm sea, constant or pure-noise input (a lock
   // needs a peak min_peak_ratio times the median of the band); shown, not an error.
@@ -651,7 +695,7 @@ void CompensatorRos::diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat)
   {
     stat.add("last refused reconfigure", last_refusal_);
   }
-  const char* mounting_names[] = { "waiting for tf", "from tf", "identity (imu frame is base frame)",
+  const char* mounting_names[] = { "waiting for tf", "from tf", "identity (imu frame is base frame, or identity_mounting)",
                                    "identity (tf lookup failed)" };
   stat.add("mounting", mounting_names[static_cast<int>(mounting_state_)]);
   stat.add("calibration", compensator_->calibrated() ? "done (" + calibration_source_ + ")" : std::string("running"));

@@ -171,6 +171,7 @@ BiasState toBiasState(const CompensatorOutput& out, Mode mode, const std::string
   msg.header.frame_id = odom_frame;
   msg.mode = toString(mode);
   msg.calibrated = out.calibrated;
+  msg.state = out.state == OutputState::kCalibrating ? BiasState::STATE_CALIBRATING : BiasState::STATE_TRACKING;
   for (std::size_t i = 0; i < 3; ++i)
   {
     const AxisState& axis = out.axes[i];
@@ -200,15 +201,17 @@ bool allFinite(const BiasState& msg)
          finite(msg.period_samples) && finite(msg.d_v) && finite(msg.d_p);
 }
 
-bool FrameFilter::accept(const std::string& frame_id)
+bool FrameFilter::accept(const std::string& frame_id) const
 {
-  if (!fixed_)
-  {
-    expected_ = frame_id;
-    fixed_ = true;
-    return true;
-  }
-  return frame_id == expected_;
+  return !fixed_ || frame_id == expected_;
+}
+
+void FrameFilter::learn(const std::string& frame_id)
+{
+  if (fixed_ || frame_id.empty())
+    return;
+  expected_ = frame_id;
+  fixed_ = true;
 }
 
 }  // namespace periodic_bias_compensation

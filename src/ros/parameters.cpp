@@ -98,6 +98,7 @@ const std::vector<Key>& keyTable()
     t.push_back({ "path_max_length", field<int>([](Parameters* p) { return &p->ros.path_max_length; }) });
     t.push_back({ "path_rate", field<double>([](Parameters* p) { return &p->ros.path_rate; }) });
     t.push_back({ "mount_timeout", field<double>([](Parameters* p) { return &p->ros.mount_timeout; }) });
+    t.push_back({ "identity_mounting", field<bool>([](Parameters* p) { return &p->ros.identity_mounting; }) });
     t.push_back({ "calibration_file", field<std::string>([](Parameters* p) { return &p->ros.calibration_file; }) });
     t.push_back({ "diagnostic_period", field<double>([](Parameters* p) { return &p->ros.diagnostic_period; }) });
     return t;

@@ -695,10 +695,25 @@ private:
     }
     CompensatorOutput result;
     const SampleStatus status = compensator_.addSample(sample, &result);
+    const ForceUnits units = compensator_.forceUnits();
+    if (units != units_)
+    {
+      units_ = units;
+      char text[240];
+      std::snprintf(text, sizeof text, "%s: mean specific force %.3f against gravity %.3f m/s^2 at t = %.3f s: %s",
+                    options_.imu_topic.c_str(), compensator_.meanSpecificForce(), compensator_.config().gravity,
+                    sample.t, toString(units).c_str());
+      // Data in g would give outputs ten times too small: refused. Otherwise only said.
+      if (units == ForceUnits::kLooksLikeG)
+        throw std::runtime_error(std::string(text) + " (REP-145 asks for m/s^2); nothing written");
+      if (units == ForceUnits::kImplausible)
+        std::fprintf(stderr, "compensate_bag: warning: %s\n", text);
+    }
     if (!producedOutput(status))
     {
       return;
     }
+    frame_filter_.learn(imu.header.frame_id);
     const OdometryFrames frames{ params_.ros.odom_frame, params_.ros.base_frame };
     const nav_msgs::Odometry filtered = toOdometry(result, OdometryKind::kFiltered, imu, mounting_, frames,
                                                    imu.header.stamp);
@@ -725,6 +740,7 @@ private:
   std::uint64_t wrong_frame_ = 0;
   std::uint64_t out_of_range_ = 0;
   std::uint64_t nonfinite_outputs_ = 0;
+  ForceUnits units_ = ForceUnits::kUnknown;  ///< the last units reported
 };
 
 /// Checks the input exists and that OUT cannot clobber it.

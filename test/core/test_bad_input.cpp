@@ -83,20 +83,57 @@ TEST(BadInput, NonFiniteFieldsAreRejectedAndCounted)
   EXPECT_EQ(c.counters().accepted, 2000u);
 }
 
-TEST(BadInput, ZeroAndNonUnitQuaternionsAreRejected)
+TEST(BadInput, NonUnitQuaternionsAreRejectedAllZerosMeansNone)
 {
   const auto r = record();
   Compensator c;
   feed(c, r, 0, 100);
   pbc::ImuSample s = r.samples[100];
-  s.orientation = pbc::Quaternion(0, 0, 0, 0);
-  EXPECT_EQ(c.addSample(s, nullptr), SampleStatus::kRejectedBadQuaternion);
   s.orientation = pbc::Quaternion(1.2, 0, 0, 0);
+  EXPECT_EQ(c.addSample(s, nullptr), SampleStatus::kRejectedBadQuaternion);
+  s.orientation = pbc::Quaternion(0.5, 0, 0, 0);
   EXPECT_EQ(c.addSample(s, nullptr), SampleStatus::kRejectedBadQuaternion);
   // Slightly off unit (float rounding in a driver) is normalised and accepted.
   s.orientation = pbc::Quaternion(1.0 + 1e-4, 0, 0, 0);
   EXPECT_EQ(c.addSample(s, nullptr), SampleStatus::kAccepted);
   EXPECT_EQ(c.counters().rejected_bad_quaternion, 2u);
+  // All zeros, as IMUs without an AHRS send it without the covariance -1 flag: no orientation,
+  // the sample is used (levelled as one without orientation), and counted.
+  for (std::size_t k = 101; k < 400; ++k)
+  {
+    pbc::ImuSample z = r.samples[k];
+    z.orientation = pbc::Quaternion(0, 0, 0, 0);
+    CompensatorOutput out;
+    ASSERT_EQ(c.addSample(z, &out), SampleStatus::kAccepted) << k;
+    ASSERT_TRUE(finiteOutput(out));
+  }
+  EXPECT_EQ(c.counters().zero_orientation, 299u);
+  EXPECT_EQ(c.counters().rejected_bad_quaternion, 2u);
+}
+
+TEST(BadInput, AccelerationInGIsRecognised)
+{
+  // A driver publishing g instead of m/s^2 (REP-145): the mean specific force says so after
+  // kUnitsSettle; in m/s^2 it is plausible; 30 m/s^2 at rest is neither.
+  for (const auto& [scale, units] : { std::pair{ 1.0 / pbc::kStandardGravity, pbc::ForceUnits::kLooksLikeG },
+                                      std::pair{ 1.0, pbc::ForceUnits::kPlausible },
+                                      std::pair{ 3.0, pbc::ForceUnits::kImplausible } })
+  {
+    const auto r = record();
+    Compensator c;
+    for (std::size_t k = 0; k < 200; ++k)
+    {
+      pbc::ImuSample s = r.samples[k];
+      s.specific_force *= scale;
+      c.addSample(s, nullptr);
+      if (k == 10)
+      {
+        EXPECT_EQ(c.forceUnits(), pbc::ForceUnits::kUnknown);
+      }
+    }
+    EXPECT_EQ(c.forceUnits(), units) << "scale " << scale;
+    EXPECT_NEAR(c.meanSpecificForce(), scale * pbc::kStandardGravity, 0.05 * scale * pbc::kStandardGravity);
+  }
 }
 
 TEST(BadInput, DuplicatedStampIsDropped)

@@ -131,11 +131,11 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     }
     pbc::CompensatorOutput out;
     const pbc::SampleStatus status = compensator.addSample(sample, &out);
-    if (status != pbc::SampleStatus::kAccepted && status != pbc::SampleStatus::kGapReset &&
-        status != pbc::SampleStatus::kResetBackwards)
+    if (!pbc::producedOutput(status))
     {
       continue;
     }
+    frames.learn(msg.header.frame_id);  // as CompensatorRos::imuCallback
     if (!out.position_filtered.allFinite() || !out.position_wave.allFinite() || !out.velocity_filtered.allFinite() ||
         !out.velocity_wave.allFinite() || !out.acceleration_level.allFinite() || !out.orientation.coeffs().allFinite())
     {

@@ -17,6 +17,7 @@
 #include <nav_msgs/Odometry.h>
 #include <rosbag/bag.h>
 #include <rosbag/view.h>
+#include <sensor_msgs/Imu.h>
 
 #include "periodic_bias_compensation/BiasState.h"
 #include "../common/shell.h"
@@ -255,6 +256,29 @@ TEST_F(CompensateBag, MissingTopicAndBadArguments)
   r = run("--in " + std::string(PBC_BENCH_BAG));
   EXPECT_EQ(r.status, 2);
   EXPECT_NE(r.output.find("usage"), std::string::npos) << r.output;
+}
+
+TEST_F(CompensateBag, AccelerationInGIsRefused)
+{
+  // A driver publishing g instead of m/s^2 (REP-145): outputs would be ten times too small, so
+  // the bag is refused with the reason, and nothing is written.
+  const std::string in = dir_ + "/in_g.bag", out = dir_ + "/out.bag";
+  {
+    rosbag::Bag bag(in, rosbag::bagmode::Write);
+    for (int k = 0; k < 500; ++k)
+    {
+      sensor_msgs::Imu m;
+      m.header.stamp.fromSec(100.0 + k * 0.01);
+      m.header.frame_id = "base_link";
+      m.linear_acceleration.z = 1.0;
+      m.orientation.w = 1.0;
+      bag.write("imu/data", m.header.stamp, m);
+    }
+  }
+  const CommandResult r = run("--in " + in + " --out " + out);
+  EXPECT_EQ(r.status, 1) << r.output;
+  EXPECT_NE(r.output.find("looks like g"), std::string::npos) << r.output;
+  expectNothingWritten(out);
 }
 
 TEST_F(CompensateBag, BagEndingMidChunkIsRefusedWithAClearMessage)

@@ -154,9 +154,16 @@ TEST(Conversions, FrameFilter)
 {
   FrameFilter learn;
   EXPECT_FALSE(learn.known());
+  EXPECT_TRUE(learn.accept(""));
+  learn.learn("");  // an empty frame_id is never required
+  EXPECT_FALSE(learn.known());
   EXPECT_TRUE(learn.accept("imu_link"));
+  learn.learn("imu_link");
+  EXPECT_TRUE(learn.known());
   EXPECT_TRUE(learn.accept("imu_link"));
   EXPECT_FALSE(learn.accept("other"));
+  EXPECT_FALSE(learn.accept(""));
+  learn.learn("other");  // the first frame learnt stays
   EXPECT_EQ(learn.expected(), "imu_link");
 
   FrameFilter fixed("imu_a");

@@ -151,7 +151,7 @@ enum class SampleStatus
 {
   kAccepted,
   kRejectedNonFinite,      ///< NaN/Inf in a used field: dropped
-  kRejectedBadQuaternion,  ///< zero or non-unit orientation: dropped
+  kRejectedBadQuaternion,  ///< non-unit orientation: dropped (all zeros means none: accepted)
   kRejectedDuplicate,      ///< same stamp as the previous sample: dropped
   kRejectedOutOfRange,     ///< finite but beyond kMaxSpecificForce / kMaxAngularRate: dropped
   kRejectedEarly,          ///< stamp far less than a period after the previous one: dropped
@@ -202,12 +202,27 @@ struct CompensatorOutput
   bool calibrated = false;
 };
 
+/// What the mean specific force says of the accelerometer's units.
+enum class ForceUnits
+{
+  kUnknown,      ///< less than kUnitsSettle of data
+  kPlausible,    ///< within 25 % of the gravity parameter: m/s^2
+  kLooksLikeG,   ///< within 25 % of 1: the driver publishes in g, not m/s^2 (REP-145)
+  kImplausible,  ///< neither
+};
+std::string toString(ForceUnits units);
+/// Time constant of the mean specific force behind ForceUnits [s].
+constexpr double kUnitsAveraging = 10.0;
+/// Data needed before ForceUnits is more than kUnknown [s].
+constexpr double kUnitsSettle = 1.0;
+
 /// Running counters for diagnostics.
 struct CompensatorCounters
 {
   std::uint64_t accepted = 0;
   std::uint64_t rejected_non_finite = 0;
   std::uint64_t rejected_bad_quaternion = 0;
+  std::uint64_t zero_orientation = 0;  ///< all-zero quaternion taken as "no orientation" (accepted)
   std::uint64_t rejected_duplicate = 0;
   std::uint64_t rejected_out_of_range = 0;
   std::uint64_t rejected_early = 0;
@@ -256,6 +271,10 @@ public:
   /// Gyro bias estimated by the gyro attitude, sensor frame [rad/s] (zero until it runs, and
   /// without estimate_gyro_bias).
   Vector3 gyroBias() const;
+  /// The accelerometer's units as the mean specific force over the last kUnitsAveraging seconds
+  /// shows them, and that mean [m/s^2 if plausible].
+  ForceUnits forceUnits() const;
+  double meanSpecificForce() const;
 
   const CompensatorCounters& counters() const;
 

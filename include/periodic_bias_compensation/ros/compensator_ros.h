@@ -4,6 +4,7 @@
 
 #include <cstdint>
 #include <deque>
+#include <functional>
 #include <memory>
 #include <string>
 
@@ -74,6 +75,8 @@ private:
   bool calibrate(std_srvs::Trigger::Request& req, std_srvs::Trigger::Response& res);
   bool saveCalibration(std_srvs::Trigger::Request& req, std_srvs::Trigger::Response& res);
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat);
+  /// The input's own faults for diagnose(): units, output stopped while input arrives.
+  void diagnoseInput(const ros::Time& now, const std::function<void(std::uint8_t, const std::string&)>& raise) const;
   void diagnosticTimer(const ros::TimerEvent& event);
 
   // Threading rule: every callback (IMU, services, reconfigure, diagnostics timer) holds mutex_
@@ -116,6 +119,8 @@ private:
   bool has_output_ = false;
   CompensatorOutput last_output_;
   ros::Time last_receive_;  ///< ROS time of the last message on imu/data
+  ros::Time last_publish_;  ///< ROS time of the last odometry published (zero: none yet)
+  ros::Time first_receive_; ///< ROS time of the first message on imu/data
   bool seen_orientation_ = false;  ///< some message carried an orientation
   bool has_orientation_ = false;   ///< the last accepted message carried one
   std::string last_refusal_;       ///< why the last reconfigure request was refused

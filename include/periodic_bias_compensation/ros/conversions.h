@@ -69,16 +69,19 @@ BiasState toBiasState(const CompensatorOutput& out, Mode mode, const std::string
 bool allFinite(const nav_msgs::Odometry& msg);
 bool allFinite(const BiasState& msg);
 
-/// Accepts IMU messages from one frame only. An empty expected frame accepts the first frame
-/// seen and requires it from then on.
+/// Accepts IMU messages from one frame only. Without an expected frame every frame passes until
+/// learn() is told the frame of a message that was used (an empty frame_id is never learnt); that
+/// frame is required from then on.
 class FrameFilter
 {
 public:
   explicit FrameFilter(const std::string& expected = std::string()) : expected_(expected), fixed_(!expected.empty())
   {
   }
-  /// True if the message frame is the expected one (learning it on the first call if unset).
-  bool accept(const std::string& frame_id);
+  /// True if the message frame is the expected one, or none is known yet.
+  bool accept(const std::string& frame_id) const;
+  /// Requires frame_id from now on, unless a frame is known already or it is empty.
+  void learn(const std::string& frame_id);
   /// The frame required from now on; empty before the first message when none was configured.
   const std::string& expected() const { return expected_; }
   bool known() const { return fixed_; }

@@ -24,6 +24,7 @@ struct RosOptions
   int path_max_length = 2000;           ///< poses kept in path/filtered and path/raw [-]
   double path_rate = 2.0;               ///< rate of path poses and path messages [Hz]
   double mount_timeout = 1.0;           ///< wait for the imu -> base transform (message time) [s]
+  bool identity_mounting = false;       ///< the IMU is mounted aligned with base_frame: no lookup
   std::string calibration_file;         ///< constant-bias YAML; loaded at start when it exists
   double diagnostic_period = 1.0;       ///< period of /diagnostics (read by diagnostic_updater) [s]
 
