@@ -621,7 +621,10 @@ public:
   /// One sample that continues the record, dt [s] after the previous one (0: the first).
   void step(ImuSample s, double dt, CompensatorOutput* out)
   {
-    if (config_.gyro_attitude)
+    // Paper mode keeps one level frame (the calibration window's gravity direction), as the
+    // paper's constant-bias calibration assumes: its loop integrates any tilt change of the gyro's
+    // attitude into the bias.
+    if (config_.gyro_attitude && config_.mode == Mode::kDefault)
       attitudeFromGyro(&s, dt);
     else
       gyro_levelled_ = false;

@@ -17,6 +17,11 @@ constexpr double kStartTimeConstant = 1.0;
 /// Largest share of the tilt error corrected in one step (keeps the explicit step stable for
 /// long sample intervals) [-].
 constexpr double kMaxStepGain = 0.5;
+/// Spread (standard deviation) of each gyro axis below which the start window is at rest [rad/s]
+/// (a hull in waves rolls and pitches at 0.05 rad/s and more; a gyro's noise is 0.002).
+constexpr double kStaticRateSpread = 0.02;
+/// Spread of |specific force| below which the start window is at rest [m/s^2].
+constexpr double kStaticForceSpread = 0.1;
 }  // namespace
 
 GyroAttitude::GyroAttitude(const GyroAttitudeConfig& config) : config_(config)
@@ -29,6 +34,7 @@ void GyroAttitude::reset()
   attitude_.setIdentity();
   bias_.setZero();
   elapsed_ = 0.0;
+  start_ = StartWindow();
 }
 
 void GyroAttitude::reset(const Eigen::Quaterniond& start)
@@ -47,12 +53,7 @@ const Eigen::Quaterniond& GyroAttitude::update(const Eigen::Vector3d& angular_ra
   const bool gravity_like = std::abs(force - kGravity) < kMaxForceDeparture * kGravity;
   if (!initialised_)
   {
-    if (gravity_like)
-    {
-      // Roll and pitch that turn the measured "up" onto z; yaw zero.
-      attitude_ = Eigen::Quaterniond::FromTwoVectors(specific_force, Eigen::Vector3d::UnitZ());
-      initialised_ = true;
-    }
+    start(angular_rate, specific_force, dt, gravity_like);
     return attitude_;
   }
   if (!(dt > 0.0))
@@ -87,6 +88,39 @@ const Eigen::Quaterniond& GyroAttitude::update(const Eigen::Vector3d& angular_ra
   if (angle > 0.0)
     attitude_ = (attitude_ * Eigen::Quaterniond(Eigen::AngleAxisd(angle, rate.normalized()))).normalized();
   return attitude_;
+}
+
+void GyroAttitude::start(const Eigen::Vector3d& angular_rate, const Eigen::Vector3d& specific_force, double dt,
+                         bool gravity_like)
+{
+  if (!gravity_like)
+    return;
+  // Welford's running means and spreads over the start window.
+  StartWindow& w = start_;
+  ++w.count;
+  const Eigen::Vector3d rate_step = angular_rate - w.rate_mean;
+  w.rate_mean += rate_step / w.count;
+  w.rate_m2 += rate_step.cwiseProduct(angular_rate - w.rate_mean);
+  w.force_mean += (specific_force - w.force_mean) / w.count;
+  const double magnitude = specific_force.norm();
+  const double magnitude_step = magnitude - w.magnitude_mean;
+  w.magnitude_mean += magnitude_step / w.count;
+  w.magnitude_m2 += magnitude_step * (magnitude - w.magnitude_mean);
+  w.elapsed += dt > 0.0 ? dt : 0.0;
+  if (w.elapsed < kStartWindow)
+    return;
+  const double n = std::max(1.0, w.count - 1.0);
+  const bool at_rest = (w.rate_m2 / n).cwiseSqrt().maxCoeff() < kStaticRateSpread &&
+                       std::sqrt(w.magnitude_m2 / n) < kStaticForceSpread;
+  // Roll and pitch that turn the measured "up" onto z; yaw zero. At rest the window's mean
+  // force is up and its mean rate the gyro bias (a consumer gyro's few degrees per second would
+  // otherwise tilt the estimate by radians before the bias loop caught up); in motion, the newest
+  // sample's force, and the bias is left to the loop.
+  attitude_ = Eigen::Quaterniond::FromTwoVectors(at_rest ? w.force_mean : specific_force, Eigen::Vector3d::UnitZ());
+  if (at_rest && config_.estimate_bias)
+    bias_ = w.rate_mean;
+  started_at_rest_ = at_rest;
+  initialised_ = true;
 }
 
 }  // namespace periodic_bias_compensation

@@ -89,7 +89,7 @@ struct CompensatorConfig
   bool heave_filter = true;
   double heave_corner_frequency = 0.015;  ///< HeaveFilter corner [Hz]
 
-  /// Samples without orientation: level them with an attitude integrated from the gyro
+  /// Default mode, samples without orientation: level them with an attitude integrated from the gyro
   /// (GyroAttitude) rather than with one fixed level frame, which leaks g sin(roll) and
   /// g sin(pitch) of the hull's motion into the level axes. It starts from the IMU's last
   /// orientation when that stops, from the specific force otherwise.

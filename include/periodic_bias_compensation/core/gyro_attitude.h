@@ -15,6 +15,10 @@
 
 namespace periodic_bias_compensation
 {
+/// Data that starts the attitude [s]: at rest (gyro and force steady) its mean rate is the gyro
+/// bias and its mean force the up direction; otherwise the attitude starts from the newest force.
+constexpr double kStartWindow = 2.0;
+
 struct GyroAttitudeConfig
 {
   /// Time constant with which the tilt follows the mean specific force [s]. Long against the
@@ -37,8 +41,8 @@ public:
   void reset(const Eigen::Quaterniond& start);
 
   /// Turns the attitude by the gyro over dt [s] and pulls the tilt towards the specific force
-  /// [m/s^2, sensor frame]. Returns the attitude, sensor -> level ENU. For dt = 0 (first sample,
-  /// or after a reset) the attitude is only initialised.
+  /// [m/s^2, sensor frame]. Returns the attitude, sensor -> level ENU. Started without an
+  /// attitude, the first kStartWindow of samples only start it (initialised() is false meanwhile).
   const Eigen::Quaterniond& update(const Eigen::Vector3d& angular_rate, const Eigen::Vector3d& specific_force,
                                    double dt);
 
@@ -51,9 +55,15 @@ public:
   {
     return bias_;
   }
+  /// False during the first kStartWindow of data (the attitude is the identity then).
   bool initialised() const
   {
     return initialised_;
+  }
+  /// The start window was at rest: the attitude and the gyro bias started from its means.
+  bool startedAtRest() const
+  {
+    return started_at_rest_;
   }
 
   void setConfig(const GyroAttitudeConfig& config)
@@ -62,7 +72,19 @@ public:
   }
 
 private:
+  /// Statistics of the start window (Welford).
+  struct StartWindow
+  {
+    double count = 0.0, elapsed = 0.0;
+    Eigen::Vector3d rate_mean = Eigen::Vector3d::Zero(), rate_m2 = Eigen::Vector3d::Zero();
+    Eigen::Vector3d force_mean = Eigen::Vector3d::Zero();
+    double magnitude_mean = 0.0, magnitude_m2 = 0.0;
+  };
+  void start(const Eigen::Vector3d& angular_rate, const Eigen::Vector3d& specific_force, double dt, bool gravity_like);
+
   GyroAttitudeConfig config_;
+  StartWindow start_;
+  bool started_at_rest_ = false;
   Eigen::Quaterniond attitude_ = Eigen::Quaterniond::Identity();
   Eigen::Vector3d bias_ = Eigen::Vector3d::Zero();
   bool initialised_ = false;

@@ -39,6 +39,8 @@ constexpr int kRecentSteps = 16;
 /// Relative difference between that median and the period that is a change of rate [-] (jitter
 /// of a quarter period moves the median of 16 differences by about 6 %).
 constexpr double kRateChange = 0.3;
+/// Longest sample period of a stream [s]: a longer step is a gap whatever the rate.
+constexpr double kMaxPeriod = 10.0;
 /// Periods a step of a stream slower than max_gap may last and still continue it [-].
 constexpr double kSlowStreamSteps = 1.5;
 /// A stamp less than this fraction of a period after the previous one is early [-].
@@ -112,10 +114,12 @@ public:
 
 private:
   /// A step that continues the stream: forwards, and no longer than max_gap or, for an IMU slower
-  /// than that, than kSlowStreamSteps periods (the second stamp of a record sets the period).
+  /// than that, than kSlowStreamSteps periods (the second stamp of a record sets the period) and
+  /// kMaxPeriod.
   bool continues(double dt) const
   {
-    return dt > 0.0 && (dt <= max_gap_ || period_ <= 0.0 || dt <= kSlowStreamSteps * period_);
+    return dt > 0.0 &&
+           (dt <= max_gap_ || (dt <= kMaxPeriod && (period_ <= 0.0 || dt <= kSlowStreamSteps * period_)));
   }
   void accept(double t, double dt);
   void startRecord();
