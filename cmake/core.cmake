@@ -22,4 +22,6 @@ if(CATKIN_ENABLE_TESTING)
     test/core/test_time_base.cpp
     test/core/test_real_world_streams.cpp)
   target_link_libraries(test_core ${PROJECT_NAME}_core)
+  # test_real_world_streams reads ../shared/data beside the repository when it is there.
+  target_compile_definitions(test_core PRIVATE PBC_SOURCE_DIR="${CMAKE_CURRENT_SOURCE_DIR}")
 endif()

@@ -5,8 +5,14 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
+#include <cstdio>
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <random>
+#include <sstream>
+#include <string>
 #include <vector>
 
 #include "periodic_bias_compensation/core/compensator.h"
@@ -229,4 +235,102 @@ TEST(RealWorldStreams, StampJitterChangesNothing)
   RecordProperty("wave_error_jittered", std::to_string(wave));
   EXPECT_LE(wave, 1.1 * clean_wave);
   EXPECT_LE(slow, 1.1 * clean_slow);
+}
+
+namespace
+{
+/// A recording at rest from ../shared/data: samples in m/s^2 and rad/s, no orientation. `skip`
+/// header lines; `columns` maps (t or -1 for k / rate, gx, gy, gz, ax, ay, az); `accel` and
+/// `gyro` scale the raw columns to m/s^2 and rad/s.
+std::vector<ImuSample> readAtRest(const std::filesystem::path& path, int skip, std::array<int, 7> columns, double accel,
+                                  double gyro, double rate)
+{
+  std::vector<ImuSample> samples;
+  std::ifstream file(path);
+  std::string line;
+  for (int i = 0; i < skip && std::getline(file, line); ++i)
+  {
+  }
+  while (std::getline(file, line))
+  {
+    std::vector<double> v;
+    std::stringstream fields(line);
+    std::string field;
+    while (std::getline(fields, field, ','))
+      v.push_back(std::stod(field));
+    ImuSample s;
+    s.t = columns[0] >= 0 ? v[columns[0]] : samples.size() / rate;
+    s.angular_rate = gyro * Vector3(v[columns[1]], v[columns[2]], v[columns[3]]);
+    s.specific_force = accel * Vector3(v[columns[4]], v[columns[5]], v[columns[6]]);
+    samples.push_back(s);
+  }
+  return samples;
+}
+
+Outcome runRecording(const std::vector<ImuSample>& samples, const pbc::CompensatorConfig& config)
+{
+  Compensator compensator(config);
+  Outcome result;
+  bool first = true;
+  Vector3 start = Vector3::Zero();
+  for (const ImuSample& s : samples)
+  {
+    CompensatorOutput out;
+    if (!pbc::producedOutput(compensator.addSample(s, &out)))
+      continue;
+    if (first)
+    {
+      first = false;
+      start = out.position_filtered;
+    }
+    result.max_wave = std::max(result.max_wave, out.position_wave.cwiseAbs().maxCoeff());
+    result.max_filtered = std::max(result.max_filtered, (out.position_filtered - start).cwiseAbs().maxCoeff());
+  }
+  return result;
+}
+}  // namespace
+
+TEST(RealWorldStreams, RealIMUsAtRestInventNoMotion)
+{
+  // Real IMUs lying still (../shared/data, not in the repository): an ADIS16405 for 10 min at
+  // 100 Hz (a 0.18 m/s^2 gravity mismatch, quantised accelerations) and an MPU-6050 for 100 s and
+  // 449 s (a gyro bias of -3.3, 1.1, -0.6 deg/s, |f| 9 m/s^2), none reporting an orientation.
+  const std::filesystem::path data = std::filesystem::path(PBC_SOURCE_DIR) / ".." / "shared" / "data";
+  if (!std::filesystem::is_directory(data))
+    GTEST_SKIP() << "real data absent (" << data.string() << "): skipped";
+  constexpr double kDegree = M_PI / 180.0;
+  const auto adis = readAtRest(data / "adis16405_static" / "adis16405_imu1_first10min_100Hz.csv", 1,
+                               { 0, 1, 2, 3, 4, 5, 6 }, pbc::kStandardGravity, kDegree, 100.0);
+  const auto mpu_short = readAtRest(data / "mpu6050_static" / "imu_static_test.csv", 5, { -1, 3, 4, 5, 0, 1, 2 },
+                                    pbc::kStandardGravity / 16384.0, kDegree / 131.0, 100.0);
+  const auto mpu_long = readAtRest(data / "mpu6050_static" / "example_data_tinit_calc.csv", 5,
+                                   { -1, 3, 4, 5, 0, 1, 2 }, pbc::kStandardGravity / 16384.0, kDegree / 131.0, 100.0);
+  ASSERT_GT(adis.size(), 50000u);
+  ASSERT_GT(mpu_short.size(), 9000u);
+  ASSERT_GT(mpu_long.size(), 40000u);
+  pbc::CompensatorConfig one_frame;
+  one_frame.gyro_attitude = false;
+  const std::vector<std::pair<std::string, const std::vector<ImuSample>*>> recordings = {
+    { "adis16405", &adis }, { "mpu6050_100s", &mpu_short }, { "mpu6050_449s", &mpu_long }
+  };
+  for (const auto& [name, samples] : recordings)
+  {
+    const Outcome gyro = runRecording(*samples, pbc::CompensatorConfig());
+    const Outcome frame = runRecording(*samples, one_frame);
+    RecordProperty(name + "_gyro_attitude_max_wave", std::to_string(gyro.max_wave));
+    RecordProperty(name + "_gyro_attitude_max_filtered", std::to_string(gyro.max_filtered));
+    RecordProperty(name + "_one_frame_max_wave", std::to_string(frame.max_wave));
+    RecordProperty(name + "_one_frame_max_filtered", std::to_string(frame.max_filtered));
+    std::printf("[at rest] %s: gyro attitude max |wave| %.3f m, filtered %.3f m; one frame %.3f m, %.3f m\n",
+                name.c_str(), gyro.max_wave, gyro.max_filtered, frame.max_wave, frame.max_filtered);
+    EXPECT_LE(frame.max_wave, 0.02) << name;
+    EXPECT_LE(frame.max_filtered, 0.02) << name;
+    // The gyro attitude holds the targets on the MPU-6050 (it starts from a window at rest); on
+    // the ADIS16405 it does not yet (docs/algorithm.md, "Limits"): those figures are recorded.
+    if (name != "adis16405")
+    {
+      EXPECT_LE(gyro.max_wave, 0.02) << name;
+      EXPECT_LE(gyro.max_filtered, 0.02) << name;
+    }
+  }
 }
