@@ -1,0 +1,65 @@
+#!/usr/bin/python3
+"""Renders the figures test_core's RealWorldStreams tests record (gtest XML, --gtest_output=xml)
+as the markdown section of docs/benchmarks.md that scripts/bench writes.
+
+  real_world_report.py RESULTS.xml
+"""
+import sys
+import xml.etree.ElementTree as ET
+
+
+def properties(path):
+    """{test name: {property: float}} of the RealWorldStreams tests."""
+    found = {}
+    for case in ET.parse(path).iter('testcase'):
+        values = {}
+        for prop in case.iter('property'):
+            values[prop.get('name')] = float(prop.get('value'))
+        for key, value in case.attrib.items():  # older gtest: properties as attributes
+            if key not in ('name', 'status', 'result', 'time', 'timestamp', 'classname', 'file', 'line'):
+                values[key] = float(value)
+        found[case.get('name')] = values
+    return found
+
+
+def seeds(values, prefix):
+    return [values[k] for k in sorted(values, key=lambda k: int(k.rsplit('_', 1)[1])) if k.startswith(prefix)]
+
+
+def main():
+    tests = properties(sys.argv[1])
+    rest = tests['SensorAtRestInventsNoMotion']
+    bench = tests['SlowPeriodicBiasIsBiasNotMotion']
+    jitter = tests['StampJitterChangesNothing']
+    sea = tests['MooredBroadSeaHeave']
+    real = tests.get('RealIMUsAtRestInventNoMotion', {})
+    print('| stream | figure | target | measured (per seed) |')
+    print('|---|---|---|---|')
+    print('| at rest, 600 s, RW 2-6e-4 m/s^2/sqrt(s), bias to 0.08 m/s^2 | max \\|odometry/wave\\| [m] | <= 0.02 | %s |'
+          % ' '.join('%.3f' % v for v in seeds(rest, 'max_wave_')))
+    print('| | max odometry/filtered excursion [m] | <= 0.02 | %s |'
+          % ' '.join('%.3f' % v for v in seeds(rest, 'max_filtered_')))
+    print('| shaken bench, bias drift 0.02-0.06 m/s^2 over 60-240 s | wave RMS error after 20 s [%% of true] | <= 5 | %s |'
+          % ' '.join('%.1f' % (100 * v) for v in seeds(bench, 'wave_error_')))
+    print('| | slow error at 60 s [m] | <= 0.02 | %s |' % ' '.join('%.3f' % v for v in seeds(bench, 'slow_error_')))
+    print('| | max odometry/filtered in the first 20 s [m] | <= 0.02 | %s |'
+          % ' '.join('%.3f' % v for v in seeds(bench, 'filtered_first_20s_')))
+    print('| bench stamps jittered by +-25 %% of the period | wave RMS error [%% of true] | within 10 %% of exact | %.2f (exact %.2f) |'
+          % (100 * jitter['wave_error_jittered'], 100 * jitter['wave_error_clean']))
+    print('| moored JONSWAP, 15 min, clean sensor | heave RMS error [%% of Hs] | - | %s |'
+          % ' '.join('%.2f' % v for v in seeds(sea, 'heave_error_percent_hs_clean_')))
+    print('| moored JONSWAP, 15 min, RW 6e-4 m/s^2/sqrt(s) | heave RMS error [%% of Hs] | median <= 4, worst <= 6 | %s |'
+          % ' '.join('%.2f' % v for v in seeds(sea, 'heave_error_percent_hs_random_walk_')))
+    for name, label in (('adis16405', 'ADIS16405 at rest, 10 min'), ('mpu6050_100s', 'MPU-6050 at rest, 100 s'),
+                        ('mpu6050_449s', 'MPU-6050 at rest, 449 s')):
+        if name + '_gyro_attitude_max_wave' not in real:
+            print('| %s | (../shared/data absent: skipped) | | |' % label)
+            continue
+        print('| %s, gyro attitude (default) | max \\|wave\\|, filtered excursion [m] | <= 0.02 | %.3f, %.3f |'
+              % (label, real[name + '_gyro_attitude_max_wave'], real[name + '_gyro_attitude_max_filtered']))
+        print('| %s, one level frame | max \\|wave\\|, filtered excursion [m] | <= 0.02 | %.3f, %.3f |'
+              % (label, real[name + '_one_frame_max_wave'], real[name + '_one_frame_max_filtered']))
+
+
+if __name__ == '__main__':
+    main()
