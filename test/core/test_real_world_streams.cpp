@@ -53,6 +53,21 @@ struct Outcome
   double slow_error = 0.0;        ///< |odometry/filtered| at the end, largest axis [m]
 };
 
+/// Largest |odometry/wave| and odometry/filtered excursion from the first output so far; returns
+/// this output's excursion.
+double noteExcursions(const CompensatorOutput& out, bool* first, Vector3* start, Outcome* result)
+{
+  if (*first)
+  {
+    *first = false;
+    *start = out.position_filtered;
+  }
+  result->max_wave = std::max(result->max_wave, out.position_wave.cwiseAbs().maxCoeff());
+  const double excursion = (out.position_filtered - *start).cwiseAbs().maxCoeff();
+  result->max_filtered = std::max(result->max_filtered, excursion);
+  return excursion;
+}
+
 Outcome run(const Stream& stream, const pbc::CompensatorConfig& config = pbc::CompensatorConfig())
 {
   std::mt19937_64 rng(stream.seed);
@@ -90,14 +105,7 @@ Outcome run(const Stream& stream, const pbc::CompensatorConfig& config = pbc::Co
     CompensatorOutput out;
     if (!pbc::producedOutput(compensator.addSample(s, &out)))
       continue;
-    if (first)
-    {
-      first = false;
-      start = out.position_filtered;
-    }
-    result.max_wave = std::max(result.max_wave, out.position_wave.cwiseAbs().maxCoeff());
-    const double excursion = (out.position_filtered - start).cwiseAbs().maxCoeff();
-    result.max_filtered = std::max(result.max_filtered, excursion);
+    const double excursion = noteExcursions(out, &first, &start, &result);
     if (t < 20.0)
       result.max_filtered_20 = std::max(result.max_filtered_20, excursion);
     else if (stream.shaken_axis >= 0)
@@ -111,17 +119,25 @@ Outcome run(const Stream& stream, const pbc::CompensatorConfig& config = pbc::Co
   return result;
 }
 
-/// Draws the ranges of a sensor at rest: noise 0.002-0.006 m/s^2/sqrt(Hz), constant bias up to
-/// 0.08 m/s^2 per axis, random walk up to 6e-4 m/s^2/sqrt(s), local gravity up to 0.02 m/s^2 off
-/// the parameter.
-Stream atRest(unsigned seed)
+/// A low-cost accelerometer: noise 0.002-0.006 m/s^2/sqrt(Hz), constant bias up to 0.08 m/s^2 per
+/// axis, drawn from rng.
+Stream lowCostSensor(unsigned seed, std::mt19937_64& rng)
 {
-  std::mt19937_64 rng(1000 + seed);
   std::uniform_real_distribution<double> u(0.0, 1.0);
   Stream s;
   s.seed = seed;
   s.noise_density = 0.002 + 0.004 * u(rng);
   s.bias = Vector3(0.16 * u(rng) - 0.08, 0.16 * u(rng) - 0.08, 0.16 * u(rng) - 0.08);
+  return s;
+}
+
+/// That sensor at rest, with a random walk up to 6e-4 m/s^2/sqrt(s) and local gravity up to
+/// 0.02 m/s^2 off the parameter.
+Stream atRest(unsigned seed)
+{
+  std::mt19937_64 rng(1000 + seed);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  Stream s = lowCostSensor(seed, rng);
   s.random_walk = 2e-4 + 4e-4 * u(rng);
   s.gravity = pbc::kStandardGravity + 0.04 * u(rng) - 0.02;
   return s;
@@ -133,12 +149,9 @@ Stream benchWithDrift(unsigned seed)
 {
   std::mt19937_64 rng(2000 + seed);
   std::uniform_real_distribution<double> u(0.0, 1.0);
-  Stream s;
-  s.seed = seed;
+  Stream s = lowCostSensor(seed, rng);
   s.rate = 87.7;
   s.duration = 60.0;
-  s.noise_density = 0.002 + 0.004 * u(rng);
-  s.bias = Vector3(0.16 * u(rng) - 0.08, 0.16 * u(rng) - 0.08, 0.16 * u(rng) - 0.08);
   s.shaken_axis = static_cast<int>(seed % 3);
   s.amplitude = 0.02 + 0.08 * u(rng);
   s.frequency = 0.3 + 0.3 * u(rng);
@@ -279,13 +292,7 @@ Outcome runRecording(const std::vector<ImuSample>& samples, const pbc::Compensat
     CompensatorOutput out;
     if (!pbc::producedOutput(compensator.addSample(s, &out)))
       continue;
-    if (first)
-    {
-      first = false;
-      start = out.position_filtered;
-    }
-    result.max_wave = std::max(result.max_wave, out.position_wave.cwiseAbs().maxCoeff());
-    result.max_filtered = std::max(result.max_filtered, (out.position_filtered - start).cwiseAbs().maxCoeff());
+    noteExcursions(out, &first, &start, &result);
   }
   return result;
 }
