@@ -1,6 +1,6 @@
 // Bad input through the real topic: crafted sensor_msgs/Imu on imu/data (NaN/Inf, non-unit
-// quaternions, wrong frame_id, duplicated stamps, stamps going backwards, a gap, a
-// changed sample rate, no orientation). Asserts that nothing non-finite is ever published, that
+// quaternions, wrong frame_id, duplicated stamps, lone stamp glitches, stamps going backwards,
+// a gap, a changed sample rate, no orientation). Asserts that nothing non-finite is ever published, that
 // /diagnostics counts every case, that valid output keeps coming afterwards, and that the status
 // turns to ERROR when the input stops.
 // Also checks the optional outputs: TF odom -> base_link, path/filtered and path/raw bounded by
@@ -320,6 +320,15 @@ TEST(BadInput, EveryCaseCountedNothingNonFinitePublished)
   source.send(source.good(source.t_));
   source.run(20, dt);
 
+  // Lone stamp glitches of real drivers: one stamp 5 s in the past, one stamped 0, one 1 ms after
+  // its predecessor. Each is dropped and counted; none is a restart.
+  source.send(source.good(source.t_ - 5.0));
+  source.run(20, dt);
+  source.send(source.good(0.0));
+  source.run(20, dt);
+  source.send(source.good(source.t_ + 0.001));
+  source.run(20, dt);
+
   // Stamps going backwards (a bag replayed again): clean reset, then forward again.
   source.t_ -= 3.0;
   source.run(150, dt);
@@ -356,6 +365,7 @@ TEST(BadInput, EveryCaseCountedNothingNonFinitePublished)
   EXPECT_EQ(observer.value("rejected bad quaternion"), 2);
   EXPECT_EQ(observer.value("rejected wrong frame"), 2);
   EXPECT_EQ(observer.value("rejected duplicate stamp"), 1);
+  EXPECT_EQ(observer.value("dropped stamp glitches"), 3);
   EXPECT_EQ(observer.value("backwards resets"), 1);
   EXPECT_EQ(observer.value("gap resets"), 1);
   EXPECT_GE(observer.value("sample rate changes"), 1);
