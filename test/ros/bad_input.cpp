@@ -1,8 +1,8 @@
 // Bad input through the real topic: crafted sensor_msgs/Imu on imu/data (NaN/Inf, non-unit
 // quaternions, wrong frame_id, duplicated stamps, lone stamp glitches, stamps going backwards,
-// a gap, a changed sample rate, no orientation). Asserts that nothing non-finite is ever published, that
-// /diagnostics counts every case, that valid output keeps coming afterwards, and that the status
-// turns to ERROR when the input stops.
+// a gap, a changed sample rate, no orientation). Asserts that nothing non-finite is ever
+// published, that /diagnostics counts every case, that valid output keeps coming afterwards, and
+// that the status turns to ERROR when the input stops.
 // Also checks the optional outputs: TF odom -> base_link, path/filtered and path/raw bounded by
 // path_max_length.
 // Private parameters: record_path, a bag that launch/record.launch must be writing;
