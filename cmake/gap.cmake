@@ -21,7 +21,7 @@ target_link_libraries(diagnose_gap ${PROJECT_NAME}_gap ${catkin_LIBRARIES})
 target_compile_definitions(diagnose_gap PRIVATE PBC_SOURCE_DIR="${CMAKE_CURRENT_SOURCE_DIR}")
 
 if(CATKIN_ENABLE_TESTING)
-  # Issue 3: simulate_imu -> compensate_bag on every file of config/scenarios (60 s each).
+  # simulate_imu -> compensate_bag on every file of config/scenarios (60 s each).
   catkin_add_gtest(test_shipped_bags test/tools/test_shipped_bags.cpp)
   target_include_directories(test_shipped_bags PRIVATE include ${catkin_INCLUDE_DIRS})
   target_link_libraries(test_shipped_bags ${catkin_LIBRARIES})

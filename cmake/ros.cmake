@@ -81,7 +81,7 @@ if(CATKIN_ENABLE_TESTING)
   add_dependencies(test_compensate_bag compensate_bag ${PROJECT_NAME}_test_bags
     ${PROJECT_NAME}_generate_messages_cpp)
 
-  # Reliability of the core (issue 6, docs/reliability.md), no master: gains refused while data
+  # Reliability of the core (docs/reliability.md), no master: gains refused while data
   # flows, orientation lost, constant/noise input, Unix-time stamps, a 3 h run at 100 Hz
   # (PBC_LONG_RUN_HOURS=24 for the measured 24 h run).
   catkin_add_gtest(test_reliability test/ros/reliability_test.cpp)
@@ -89,7 +89,7 @@ if(CATKIN_ENABLE_TESTING)
   target_compile_definitions(test_reliability PRIVATE
     PBC_SCENARIO_DIR="${CMAKE_CURRENT_SOURCE_DIR}/config/scenarios")
 
-  # Run-time faults while data flows, each seen in /diagnostics (issue 6).
+  # Run-time faults while data flows, each seen in /diagnostics.
   add_rostest_gtest(test_faults test/ros/faults.test test/ros/faults.cpp)
   target_link_libraries(test_faults ${catkin_LIBRARIES})
   add_dependencies(test_faults ${PROJECT_NAME}_nodelet ${PROJECT_NAME}_generate_messages_cpp ${PROJECT_NAME}_gencfg)
