@@ -1,5 +1,6 @@
 #include "periodic_bias_compensation/core/compensator.h"
 #include "periodic_bias_compensation/core/heave_filter.h"
+#include "periodic_bias_compensation/core/wiener_heave.h"
 
 #include <algorithm>
 #include <cmath>
@@ -38,6 +39,9 @@ constexpr double kMinHeaveWeight = 0.1;
 /// Time constant with which the broadband heave's weight follows its target [s]: a lock gained or
 /// lost fades it in or out, never steps it.
 constexpr double kWeightTime = 2.0;
+/// Lowest wave frequency relative to min_frequency (the lowest peak searched): a wind sea or a
+/// swell holds almost no energy below 0.6 times its peak frequency [-].
+constexpr double kWaveBandEdge = 0.6;
 /// Most Euler steps of the slow-motion observer per sample (stepDefault).
 constexpr int kMaxObserverSteps = 10000;
 /// Highest sample rate planned for [Hz]: a stamp step far below any IMU's period (a driver
@@ -440,6 +444,9 @@ struct AxisEstimator
   // Default mode, vertical axis with heave_filter (broadbandHeave): the broadband heave, the
   // variance of its difference from the harmonic model's, and the white noise variance per sample.
   HeaveFilter heave;
+  WienerHeave spectral_heave;         ///< replaces heave's displacement once designed
+  double heave_error_variance = 0.0;  ///< of the broadband heave in use [m^2]
+  double heave_velocity_variance = 0.0;  ///< [m^2/s^2]
   struct HighPass
   {
     double input = 0.0, output = 0.0;
@@ -812,6 +819,8 @@ private:
       axis.bias_rate = 0.0;
       axis.residual_variance = 0.0;
       axis.heave.setCornerFrequency(config_.heave_corner_frequency);
+      axis.spectral_heave.setMinFrequency(kWaveBandEdge * config_.min_frequency);
+      axis.heave_error_variance = axis.heave_velocity_variance = 0.0;
       axis.residual_high = {};
       axis.residual_heave.setCornerFrequency(config_.heave_corner_frequency);
       axis.residual_band_variance = 0.0;
@@ -1170,11 +1179,25 @@ private:
   /// with kWeightTime: a narrow sea (the bench) or none (at rest) keeps the harmonic model
   /// whatever the bias does; a broad one (JONSWAP) takes the broadband heave.
   void broadbandHeave(AxisEstimator& axis, double raw, double residual, double dt, double* wave_a, double* wave_x,
-                      double* wave_v, double* weight, double* noise_density)
+                      double* wave_v, double* weight)
   {
     // The measured acceleration less the calibrated offset (fixed once calibrated, so no loop with
     // the drift observer): gravity mismatch and bias are no step into the filter at its start.
-    const HeaveOutput heave = axis.heave.update(raw - (calibrated_ ? constant_bias_[2] : 0.0), dt);
+    const double vertical = raw - (calibrated_ ? constant_bias_[2] : 0.0);
+    HeaveOutput heave = axis.heave.update(vertical, dt);
+    // Once the spectrum has been measured, the Wiener filter designed from it replaces the fixed
+    // filter's displacement and velocity (its acceleration is the wave band's either way).
+    const double density = 2.0 * axis.noise_variance * (rate_ > 0.0 ? 1.0 / rate_ : 0.0);
+    const WienerHeaveOutput spectral = axis.spectral_heave.update(vertical, dt, density);
+    axis.heave_error_variance = axis.heave.positionVariance(density);
+    axis.heave_velocity_variance = axis.heave.velocityVariance(density);
+    if (spectral.valid)
+    {
+      heave.position = spectral.position;
+      heave.velocity = spectral.velocity;
+      axis.heave_error_variance = spectral.error_variance;
+      axis.heave_velocity_variance = spectral.velocity_error_variance;
+    }
     if (dt > 0.0)
     {
       const double minute = 1.0 - std::exp(-dt / kHeaveAveraging);
@@ -1215,7 +1238,7 @@ private:
       axis.heave_low_variance += average * (below * below - axis.heave_low_variance);
     }
     axis.previous_raw = raw;
-    *noise_density = 2.0 * axis.noise_variance * (rate_ > 0.0 ? 1.0 / rate_ : 0.0);
+    const double noise_density = 2.0 * axis.noise_variance * (rate_ > 0.0 ? 1.0 / rate_ : 0.0);
     double target = 0.0;
     {
       // Less the white noise through the high-passes and the filter (about 1 / s^2 there):
@@ -1223,10 +1246,10 @@ private:
       static_assert(kResidualStages == 2, "the noise floor below is that of two stages");
       const double omega_h = 2.0 * M_PI * config_.min_frequency;
       const double missed =
-          std::max(0.0, axis.residual_band_variance - *noise_density / (8.0 * omega_h * omega_h * omega_h));
+          std::max(0.0, axis.residual_band_variance - noise_density / (8.0 * omega_h * omega_h * omega_h));
       // The filter's output below the band as it is now, when larger than its average: bias
       // wander grows faster than a minute's mean follows.
-      const double filter = axis.heave.positionVariance(*noise_density) +
+      const double filter = axis.heave_error_variance +
                             std::max(axis.heave_low_variance, axis.heave_low.back() * axis.heave_low.back());
       target = missed > 0.0 ? missed / (missed + filter) : 0.0;
       // A share of a few percent gains little and adds that share of everything the filter passes
@@ -1341,9 +1364,9 @@ private:
     }
     fadePreviousModel(axis, dt, &wave_a, &wave_x, &wave_v);
 
-    double heave_weight = 0.0, heave_noise = 0.0;
+    double heave_weight = 0.0;
     if (i == 2 && config_.heave_filter && config_.enable_periodic)
-      broadbandHeave(axis, raw, residual, dt, &wave_a, &wave_x, &wave_v, &heave_weight, &heave_noise);
+      broadbandHeave(axis, raw, residual, dt, &wave_a, &wave_x, &wave_v, &heave_weight);
 
     // Fourth-order observer, poles at -w (characteristic (s + w)^4): position, velocity, the
     // bias and its rate. p / a = s^2 / (s + w)^4, so a constant bias and one that changes at a
@@ -1394,9 +1417,9 @@ private:
     const double harmonic_share = (1.0 - heave_weight) * (1.0 - heave_weight);
     const double heave_share = heave_weight * heave_weight;
     out->wave_position_variance[i] = harmonic_share * axis.residual_variance * variance_factor +
-                                     heave_share * axis.heave.positionVariance(heave_noise);
+                                     heave_share * axis.heave_error_variance;
     out->wave_velocity_variance[i] = harmonic_share * axis.residual_variance * velocity_variance_factor +
-                                     heave_share * axis.heave.velocityVariance(heave_noise);
+                                     heave_share * axis.heave_velocity_variance;
   }
 
   /// Paper mode, Eq. 1-7 with the decisions of docs/algorithm.md: integrals on the corrected

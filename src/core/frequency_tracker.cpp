@@ -1,59 +1,22 @@
 #include "periodic_bias_compensation/core/frequency_tracker.h"
 
-#include <fftw3.h>
+#include "real_fft.h"
 
 #include <algorithm>
 #include <cmath>
-#include <mutex>
 #include <stdexcept>
 
 namespace periodic_bias_compensation
 {
-namespace
-{
-/// Smallest 2^a 3^b 5^c >= n: FFTW is fastest on such sizes (a window of 87.7 Hz x 30 s =
-/// 2631 = 3 x 877 samples would need a prime-size transform).
-int fastFftSize(int n)
-{
-  for (int m = n;; ++m)
-  {
-    int r = m;
-    for (int f : { 2, 3, 5 })
-      while (r % f == 0)
-        r /= f;
-    if (r == 1)
-      return m;
-  }
-}
-
-// FFTW's planner is not thread-safe; execution of an existing plan is.
-std::mutex& plannerMutex()
-{
-  static std::mutex mutex;
-  return mutex;
-}
-}  // namespace
-
 struct FrequencyTracker::Plan
 {
-  explicit Plan(int n) : n(n)
+  explicit Plan(int n) : fft(n), n(n), in(fft.in), out(fft.out)
   {
-    in = fftw_alloc_real(n);
-    out = fftw_alloc_complex(n / 2 + 1);
-    std::lock_guard<std::mutex> lock(plannerMutex());
-    plan = fftw_plan_dft_r2c_1d(n, in, out, FFTW_ESTIMATE);
   }
-  ~Plan()
-  {
-    std::lock_guard<std::mutex> lock(plannerMutex());
-    fftw_destroy_plan(plan);
-    fftw_free(in);
-    fftw_free(out);
-  }
+  RealFft fft;
   int n;
   double* in;
   fftw_complex* out;
-  fftw_plan plan;
   std::vector<double> power;
   std::vector<double> band_power;
   std::vector<double> window;  ///< Hann window for `window_length` samples
@@ -212,7 +175,7 @@ FrequencyEstimate FrequencyTracker::analyse(double f_min, double f_max, double m
     window += lengths[p];
   }
   std::fill(plan_->in + available, plan_->in + fft_size_, 0.0);
-  fftw_execute(plan_->plan);
+  plan_->fft.execute();
 
   const double elapsed = times_[(head_ - 1 + n_) % n_] - times_[(head_ - available + n_) % n_];
   const double rate = elapsed > 0.0 ? (available - 1) / elapsed : rate_;

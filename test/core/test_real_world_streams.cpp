@@ -405,10 +405,10 @@ double mooredHeaveError(unsigned seed, double random_walk, double duration)
 TEST(RealWorldStreams, MooredBroadSeaHeave)
 {
   // 15 min of moored JONSWAP sea per seed, with a clean sensor and with a bias random walk of
-  // 6e-4 m/s^2/sqrt(s). The clean sensor's heave error stays under 5 % of Hs; the random walk's
-  // figures are recorded (docs/algorithm.md, "Limits": the heave filter cannot tell such a walk
-  // from heave below 0.04 Hz).
-  for (unsigned seed = 1; seed <= 3; ++seed)
+  // 6e-4 m/s^2/sqrt(s): heave error under 5 % of Hs with the clean sensor; with the walk, the
+  // median at most 4 % and the worst 6 %.
+  std::vector<double> walks;
+  for (unsigned seed = 1; seed <= 5; ++seed)
   {
     const double clean = mooredHeaveError(seed, 0.0, 900.0);
     const double walk = mooredHeaveError(seed, 6e-4, 900.0);
@@ -417,5 +417,9 @@ TEST(RealWorldStreams, MooredBroadSeaHeave)
     std::printf("[moored JONSWAP, seed %u] heave error %.2f %% of Hs clean, %.2f %% with the random walk\n", seed, clean,
                 walk);
     EXPECT_LT(clean, 5.0) << "seed " << seed;
+    walks.push_back(walk);
   }
+  std::sort(walks.begin(), walks.end());
+  EXPECT_LE(walks[walks.size() / 2], 4.0);
+  EXPECT_LE(walks.back(), 6.0);
 }

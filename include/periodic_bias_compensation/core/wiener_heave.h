@@ -1,0 +1,130 @@
+// Heave from the measured spectrum: a causal Wiener filter designed from the vertical
+// acceleration itself (estimation core, no ROS).
+//
+// A fixed double integrator with drift removal (HeaveFilter) must put its corner well below the
+// wave band, and everything between the corner and the band, a bias random walk above all, is
+// doubly integrated into heave. The sea's own spectrum says where heave is: a wind sea or a
+// swell has almost no energy below about 0.6 times its peak frequency. WienerHeave therefore
+//
+//  1. low-passes the acceleration (two moving averages of D samples, D dt ~ 0.5 s) and keeps it
+//     at the full rate, and every D-th value at the design rate 1 / (D dt) ~ 2 Hz;
+//  2. every kRedesignInterval, from the last kDesignWindow of design-rate values: a Welch
+//     spectrum (Hann segments of kSegment, half overlap), the wave acceleration in it
+//     (the spectrum less three times the white-noise floor, nothing below min_frequency), and
+//     from that the cross-correlation between displacement (acceleration / -omega^2) and the
+//     low-passed acceleration, and the acceleration's autocorrelation from the same spectrum;
+//  3. solves the Wiener-Hopf (normal) equations for a causal FIR over a span of six peak
+//     periods (kSpanPeriods, kMinSpan..kMaxSpan) at the design rate, for displacement and
+//     velocity (Levinson recursion);
+//  4. applies the FIR at every sample to the low-passed values D samples apart ending at that
+//     sample, so the output has the input's rate; a new design fades in over kDesignFade.
+//
+// Below min_frequency and under the noise floor the filter passes nothing, so bias wander and
+// white noise are weighted by what the spectrum holds, not by a fixed corner. Until the first
+// design (kFirstDesign of data) it has no output: the owner uses another estimate.
+//
+// Threading: not thread-safe; the owner serialises calls.
+#pragma once
+
+#include <memory>
+#include <vector>
+
+namespace periodic_bias_compensation
+{
+class RealFft;
+
+/// One step's output of WienerHeave.
+struct WienerHeaveOutput
+{
+  bool valid = false;         ///< false until the first design
+  double position = 0.0;      ///< wave displacement [m]
+  double velocity = 0.0;      ///< [m/s]
+  double error_variance = 0.0;  ///< the design's expected displacement error variance [m^2]
+  double velocity_error_variance = 0.0;  ///< [m^2/s^2]
+};
+
+class WienerHeave
+{
+public:
+  static constexpr double kDesignPeriod = 0.5;     ///< target spacing of the design rate [s]
+  static constexpr double kFirstDesign = 60.0;    ///< data before the first design [s]
+  static constexpr double kDesignWindow = 600.0;   ///< data a design uses at most [s]
+  static constexpr double kRedesignInterval = 30.0;  ///< [s]
+  static constexpr int kSegment = 256;             ///< Welch segment [design-rate samples]
+  static constexpr int kMinSegment = 64;           ///< the shortest, for early designs
+  static constexpr int kDftSize = 1024;            ///< zero-padded transform of a segment
+  static constexpr double kSpanPeriods = 6.0;      ///< FIR span in peak periods
+  static constexpr double kMinSpan = 20.0;         ///< [s]
+  static constexpr double kMaxSpan = 120.0;        ///< [s]
+  static constexpr double kNoiseMargin = 3.0;      ///< multiples of the noise floor taken as noise
+  static constexpr double kDesignFade = 2.0;       ///< [s]
+
+  /// min_frequency [Hz]: the lowest wave frequency; below it nothing is heave.
+  explicit WienerHeave(double min_frequency = 0.04);
+
+  /// Forgets everything; the next sample starts a new record.
+  void reset();
+  void setMinFrequency(double min_frequency);
+
+  /// Takes the vertical acceleration a [m/s^2] (gravity removed), the sample period dt [s]
+  /// (constant over a record: a change of rate needs reset()) and the white-noise density of the
+  /// acceleration squared, one-sided [(m/s^2)^2/Hz], used at the next design.
+  WienerHeaveOutput update(double a, double dt, double noise_density_squared);
+
+  /// The design rate's spacing in samples (0 before the first sample).
+  int decimation() const
+  {
+    return decimation_;
+  }
+  /// Peak frequency of the displacement spectrum at the last design [Hz] (0: none yet).
+  double peakFrequency() const
+  {
+    return peak_frequency_;
+  }
+
+private:
+  struct Design
+  {
+    std::vector<double> position;  ///< FIR taps, newest first
+    std::vector<double> velocity;
+    double mean = 0.0;             ///< the design window's mean acceleration, taken off first
+    double error_variance = 0.0;
+    double velocity_error_variance = 0.0;
+  };
+  void design(double noise_density_squared);
+  void apply(const Design& d, double* x, double* v) const;
+
+  double min_frequency_;
+  double dt_ = 0.0;
+  int decimation_ = 0;
+  // Two moving averages of decimation_ samples.
+  std::vector<double> first_, second_;
+  double first_sum_ = 0.0, second_sum_ = 0.0;
+  long samples_ = 0;
+  // Low-passed values at the full rate, the newest at history_[head_].
+  std::vector<double> history_;
+  int head_ = 0;
+  // Design-rate values, oldest first, at most kDesignWindow.
+  std::vector<double> decimated_;
+  double since_design_ = 0.0;
+  // Designs are never changed once made: copies of this object share them.
+  std::shared_ptr<const Design> current_, previous_;
+  double fade_ = 1.0;  ///< weight of current_ against previous_
+  double peak_frequency_ = 0.0;
+  /// The transform of the design, made at the first design; a copy of this object makes its own.
+  struct Transform
+  {
+    Transform() = default;
+    Transform(const Transform&)
+    {
+    }
+    Transform& operator=(const Transform&)
+    {
+      return *this;
+    }
+    std::shared_ptr<RealFft> fft;
+  };
+  Transform transform_;
+};
+
+}  // namespace periodic_bias_compensation

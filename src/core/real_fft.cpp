@@ -1,0 +1,46 @@
+#include "real_fft.h"
+
+namespace periodic_bias_compensation
+{
+namespace
+{
+// FFTW's planner is not thread-safe; execution of an existing plan is.
+std::mutex& plannerMutex()
+{
+  static std::mutex mutex;
+  return mutex;
+}
+}  // namespace
+
+int fastFftSize(int n)
+{
+  for (int m = n;; ++m)
+  {
+    int r = m;
+    for (int f : { 2, 3, 5 })
+      while (r % f == 0)
+        r /= f;
+    if (r == 1)
+      return m;
+  }
+}
+
+RealFft::RealFft(int n) : n_(n)
+{
+  in = fftw_alloc_real(n);
+  out = fftw_alloc_complex(n / 2 + 1);
+  std::lock_guard<std::mutex> lock(plannerMutex());
+  plan_ = fftw_plan_dft_r2c_1d(n, in, out, FFTW_ESTIMATE);
+  inverse_plan_ = fftw_plan_dft_c2r_1d(n, out, in, FFTW_ESTIMATE);
+}
+
+RealFft::~RealFft()
+{
+  std::lock_guard<std::mutex> lock(plannerMutex());
+  fftw_destroy_plan(plan_);
+  fftw_destroy_plan(inverse_plan_);
+  fftw_free(in);
+  fftw_free(out);
+}
+
+}  // namespace periodic_bias_compensation

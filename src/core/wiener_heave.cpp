@@ -1,0 +1,295 @@
+#include "periodic_bias_compensation/core/wiener_heave.h"
+
+#include <algorithm>
+#include <cmath>
+#include <complex>
+#include <stdexcept>
+
+#include "real_fft.h"
+
+namespace periodic_bias_compensation
+{
+namespace
+{
+/// Solves T x = b for the symmetric Toeplitz T with first column t (Levinson recursion, O(n^2)).
+/// Returns false when T is not positive definite to working precision.
+bool solveToeplitz(const std::vector<double>& t, const std::vector<double>& b, std::vector<double>* x)
+{
+  const int n = static_cast<int>(t.size());
+  if (n == 0 || !(t[0] > 0.0))
+    return false;
+  std::vector<double> forward(n, 0.0), next(n, 0.0);
+  x->assign(n, 0.0);
+  forward[0] = 1.0 / t[0];
+  (*x)[0] = b[0] / t[0];
+  for (int m = 1; m < n; ++m)
+  {
+    // Error of the forward vector extended by a zero; the backward vector is its reverse.
+    double e = 0.0;
+    for (int i = 0; i < m; ++i)
+      e += t[m - i] * forward[i];
+    const double denominator = 1.0 - e * e;
+    if (!(denominator > 1e-12))
+      return false;
+    for (int i = 0; i <= m; ++i)
+    {
+      const double f = i < m ? forward[i] : 0.0;
+      const double g = i > 0 ? forward[m - i] : 0.0;
+      next[i] = (f - e * g) / denominator;
+    }
+    std::copy(next.begin(), next.begin() + m + 1, forward.begin());
+    double ex = 0.0;
+    for (int i = 0; i < m; ++i)
+      ex += t[m - i] * (*x)[i];
+    const double correction = b[m] - ex;
+    // Backward vector: forward reversed.
+    for (int i = 0; i <= m; ++i)
+      (*x)[i] += correction * forward[m - i];
+  }
+  return true;
+}
+}  // namespace
+
+WienerHeave::WienerHeave(double min_frequency) : min_frequency_(min_frequency)
+{
+  setMinFrequency(min_frequency);
+}
+
+void WienerHeave::setMinFrequency(double min_frequency)
+{
+  if (!(min_frequency > 0.0) || !std::isfinite(min_frequency))
+    throw std::invalid_argument("WienerHeave: min_frequency must be finite and > 0");
+  min_frequency_ = min_frequency;
+  reset();
+}
+
+void WienerHeave::reset()
+{
+  dt_ = 0.0;
+  decimation_ = 0;
+  first_.clear();
+  second_.clear();
+  first_sum_ = second_sum_ = 0.0;
+  samples_ = 0;
+  history_.clear();
+  head_ = 0;
+  decimated_.clear();
+  since_design_ = 0.0;
+  current_.reset();
+  previous_.reset();
+  fade_ = 1.0;
+  peak_frequency_ = 0.0;
+}
+
+WienerHeaveOutput WienerHeave::update(double a, double dt, double noise_density_squared)
+{
+  WienerHeaveOutput out;
+  if (!std::isfinite(a))
+    return out;
+  if (decimation_ == 0)
+  {
+    if (!(dt > 0.0) || !std::isfinite(dt))
+      return out;  // the first sample's dt is unknown: wait for a step
+    dt_ = dt;
+    decimation_ = std::max(1, static_cast<int>(std::lround(kDesignPeriod / dt)));
+    first_.assign(decimation_, 0.0);
+    second_.assign(decimation_, 0.0);
+    const int span = static_cast<int>(std::ceil(kMaxSpan / (decimation_ * dt_)));
+    history_.assign(static_cast<size_t>(span) * decimation_ + 1, 0.0);
+  }
+  // Two moving averages (running sums over circular buffers of decimation_ values).
+  const int slot = static_cast<int>(samples_ % decimation_);
+  first_sum_ += a - first_[slot];
+  first_[slot] = a;
+  const double once = first_sum_ / decimation_;
+  second_sum_ += once - second_[slot];
+  second_[slot] = once;
+  const double low = second_sum_ / decimation_;
+  ++samples_;
+  head_ = (head_ + 1) % static_cast<int>(history_.size());
+  history_[head_] = low;
+  if (samples_ < 2 * decimation_)
+    return out;  // the averages are not full yet
+  if (samples_ % decimation_ == 0)
+  {
+    decimated_.push_back(low);
+    const size_t most = static_cast<size_t>(kDesignWindow / (decimation_ * dt_));
+    if (decimated_.size() > most)
+      decimated_.erase(decimated_.begin(), decimated_.begin() + (decimated_.size() - most));
+  }
+  since_design_ += dt_;
+  const double recorded = decimated_.size() * decimation_ * dt_;
+  if ((current_ ? since_design_ >= kRedesignInterval : recorded >= kFirstDesign) &&
+      static_cast<int>(decimated_.size()) >= kMinSegment)
+  {
+    design(noise_density_squared);
+    since_design_ = 0.0;
+  }
+  if (!current_)
+    return out;
+  apply(*current_, &out.position, &out.velocity);
+  out.error_variance = current_->error_variance;
+  out.velocity_error_variance = current_->velocity_error_variance;
+  if (previous_)
+  {
+    fade_ = std::min(1.0, fade_ + dt_ / kDesignFade);
+    double x_old = 0.0, v_old = 0.0;
+    apply(*previous_, &x_old, &v_old);
+    out.position = fade_ * out.position + (1.0 - fade_) * x_old;
+    out.velocity = fade_ * out.velocity + (1.0 - fade_) * v_old;
+    if (fade_ >= 1.0)
+      previous_.reset();
+  }
+  out.valid = true;
+  return out;
+}
+
+void WienerHeave::apply(const Design& d, double* x, double* v) const
+{
+  const int size = static_cast<int>(history_.size());
+  double px = 0.0, pv = 0.0;
+  int index = head_;
+  for (size_t k = 0; k < d.position.size(); ++k)
+  {
+    const double value = history_[index] - d.mean;
+    px += d.position[k] * value;
+    pv += d.velocity[k] * value;
+    index -= decimation_;
+    if (index < 0)
+      index += size;
+  }
+  *x = px;
+  *v = pv;
+}
+
+void WienerHeave::design(double noise_density_squared)
+{
+  if (!transform_.fft)
+    transform_.fft = std::make_shared<RealFft>(kDftSize);
+  RealFft& fft = *transform_.fft;
+  const int n = static_cast<int>(decimated_.size());
+  const double fs = 1.0 / (decimation_ * dt_);
+  double mean = 0.0;
+  for (double value : decimated_)
+    mean += value;
+  mean /= n;
+
+  // Welch: two-sided density [(m/s^2)^2/Hz] at kDftSize / 2 + 1 frequencies.
+  const int bins = kDftSize / 2 + 1;
+  std::vector<double> density(bins, 0.0);
+  // Segments of kSegment, shorter (coarser, but more than one) while the record is short.
+  int segment = kSegment;
+  while (segment > kMinSegment && 2 * segment > n)
+    segment /= 2;
+  std::vector<double> window(segment);
+  double window_power = 0.0;
+  for (int i = 0; i < segment; ++i)
+  {
+    window[i] = 0.5 - 0.5 * std::cos(2.0 * M_PI * i / segment);
+    window_power += window[i] * window[i];
+  }
+  int segments = 0;
+  for (int start = n - segment; start >= 0; start -= segment / 2, ++segments)
+  {
+    for (int i = 0; i < segment; ++i)
+      fft.in[i] = window[i] * (decimated_[start + i] - mean);
+    std::fill(fft.in + segment, fft.in + kDftSize, 0.0);
+    fft.execute();
+    for (int k = 0; k < bins; ++k)
+      density[k] += fft.power(k);
+  }
+  for (double& d : density)
+    d /= segments * window_power * fs;
+
+  // Wave acceleration and the cross-spectrum E[x a_d*] of displacement and low-passed
+  // acceleration; the low-pass's response AA (two moving averages of D samples at dt).
+  const double df = fs / kDftSize;
+  const double floor = 0.5 * std::max(noise_density_squared, 0.0);
+  // The window spreads every line over neighbouring bins (over +-2 bins of a segment in its main
+  // lobe): power a bin in the band may owe to the bias wander below min_frequency, the largest
+  // lines of the spectrum, is not wave. The window's response, relative to its peak:
+  for (int i = 0; i < kDftSize; ++i)
+    fft.in[i] = i < segment ? window[i] : 0.0;
+  fft.execute();
+  std::vector<double> response(bins);
+  for (int k = 0; k < bins; ++k)
+    response[k] = fft.power(k) / fft.power(0);
+  const int below = std::min(bins, static_cast<int>(std::ceil(min_frequency_ / df)));
+  std::vector<std::complex<double>> cross(bins);
+  double displacement_variance = 0.0, velocity_variance = 0.0, peak = 0.0;
+  peak_frequency_ = 0.0;
+  for (int k = 1; k < bins; ++k)
+  {
+    const double f = k * df, omega = 2.0 * M_PI * f;
+    const double half = 0.5 * omega * dt_;
+    const double ratio = std::sin(decimation_ * half) / (decimation_ * std::sin(half));
+    const double gain = ratio * ratio;
+    const std::complex<double> aa = gain * std::polar(1.0, -omega * (decimation_ - 1) * dt_);
+    double wave = 0.0;
+    if (k >= below && gain > 1e-6)
+    {
+      double leak = 0.0;
+      for (int j = 0; j < below; ++j)
+        leak += density[j] * response[k - j];
+      wave = std::max(0.0, density[k] - kNoiseMargin * (floor * gain * gain + leak)) / (gain * gain);
+    }
+    cross[k] = -std::conj(aa) * wave / (omega * omega);
+    const double displacement = wave / (omega * omega * omega * omega);
+    displacement_variance += 2.0 * displacement * df;
+    velocity_variance += 2.0 * displacement * omega * omega * df;
+    if (displacement > peak)
+    {
+      peak = displacement;
+      peak_frequency_ = f;
+    }
+  }
+  if (!(peak > 0.0))
+  {
+    // No wave in the spectrum: no heave.
+    auto none = std::make_shared<Design>();
+    none->position.assign(1, 0.0);
+    none->velocity.assign(1, 0.0);
+    none->mean = mean;
+    previous_ = std::move(current_);
+    current_ = std::move(none);
+    fade_ = previous_ ? 0.0 : 1.0;
+    return;
+  }
+  const double span = std::clamp(kSpanPeriods / peak_frequency_, kMinSpan, kMaxSpan);
+  const int taps = std::min(static_cast<int>(std::lround(span * fs)), kDftSize / 2);
+
+  // Correlations at lags 0..taps-1: the inverse transforms of the (Hermitian) spectra, the
+  // velocity's cross-spectrum j omega times the displacement's.
+  const auto correlation = [&](auto spectrum) {
+    for (int k = 0; k < bins; ++k)
+    {
+      const std::complex<double> value = spectrum(k);
+      fft.out[k][0] = value.real();
+      fft.out[k][1] = value.imag();
+    }
+    fft.inverse();
+    return std::vector<double>(fft.in, fft.in + taps);
+  };
+  std::vector<double> autocorrelation = correlation([&](int k) { return std::complex<double>(density[k] * df); });
+  std::vector<double> r_position = correlation([&](int k) { return cross[k] * df; });
+  std::vector<double> r_velocity = correlation(
+      [&](int k) { return std::complex<double>(0.0, 2.0 * M_PI * k * df) * cross[k] * df; });
+  auto next = std::make_shared<Design>();
+  if (!solveToeplitz(autocorrelation, r_position, &next->position) ||
+      !solveToeplitz(autocorrelation, r_velocity, &next->velocity))
+    return;  // keep the last design
+  double explained = 0.0, explained_velocity = 0.0;
+  for (int i = 0; i < taps; ++i)
+  {
+    explained += next->position[i] * r_position[i];
+    explained_velocity += next->velocity[i] * r_velocity[i];
+  }
+  next->error_variance = std::max(0.0, displacement_variance - explained);
+  next->velocity_error_variance = std::max(0.0, velocity_variance - explained_velocity);
+  next->mean = mean;
+  previous_ = std::move(current_);
+  current_ = std::move(next);
+  fade_ = previous_ ? 0.0 : 1.0;
+}
+
+}  // namespace periodic_bias_compensation
