@@ -35,6 +35,11 @@ void GyroAttitude::reset()
   bias_.setZero();
   elapsed_ = 0.0;
   start_ = StartWindow();
+  block_sum_ = Block();
+  block_count_ = block_elapsed_ = 0.0;
+  blocks_filled_ = block_next_ = 0;
+  quiet_ = false;
+  rate_less_bias_.setZero();
 }
 
 void GyroAttitude::reset(const Eigen::Quaterniond& start)
@@ -59,6 +64,13 @@ const Eigen::Quaterniond& GyroAttitude::update(const Eigen::Vector3d& angular_ra
   if (!(dt > 0.0))
     return attitude_;
   elapsed_ += dt;
+  watchQuiet(angular_rate, specific_force, dt);
+  rate_less_bias_ += std::min(1.0, dt / kQuietExitTime) * (angular_rate - bias_ - rate_less_bias_);
+  if (quiet_ && rate_less_bias_.norm() > kQuietRateLimit)
+  {
+    quiet_ = false;
+    blocks_filled_ = 0;
+  }
 
   // The tilt pull starts fast (the first sample's force includes the wave acceleration) and
   // relaxes to tilt_time_constant; the bias integral runs only once it has.
@@ -81,13 +93,53 @@ const Eigen::Quaterniond& GyroAttitude::update(const Eigen::Vector3d& angular_ra
     k_i = 1.0 / (time_constant * time_constant);
   }
   k_p = std::min(k_p, kMaxStepGain / dt);
-  bias_ -= k_i * error * dt;
-
-  const Eigen::Vector3d rate = angular_rate - bias_ + k_p * error;
+  Eigen::Vector3d rate = k_p * error;
+  if (quiet_)
+  {
+    if (config_.estimate_bias)
+      bias_ += std::min(1.0, dt / kQuietBiasTime) * (angular_rate - bias_);
+  }
+  else
+  {
+    bias_ -= k_i * error * dt;
+    rate += angular_rate - bias_;
+  }
   const double angle = rate.norm() * dt;
   if (angle > 0.0)
     attitude_ = (attitude_ * Eigen::Quaterniond(Eigen::AngleAxisd(angle, rate.normalized()))).normalized();
   return attitude_;
+}
+
+void GyroAttitude::watchQuiet(const Eigen::Vector3d& angular_rate, const Eigen::Vector3d& specific_force,
+                              double dt)
+{
+  block_sum_.rate += angular_rate;
+  block_sum_.force += specific_force;
+  ++block_count_;
+  block_elapsed_ += dt;
+  if (block_elapsed_ < 1.0)
+    return;
+  Block& newest = blocks_[block_next_];
+  newest.rate = block_sum_.rate / block_count_;
+  newest.force = block_sum_.force / block_count_;
+  block_next_ = (block_next_ + 1) % kQuietBlocks;
+  blocks_filled_ = std::min(blocks_filled_ + 1, kQuietBlocks);
+  block_sum_ = Block();
+  block_count_ = block_elapsed_ = 0.0;
+  if (blocks_filled_ < kQuietBlocks)
+  {
+    quiet_ = false;
+    return;
+  }
+  Eigen::Vector3d rate_min = newest.rate, rate_max = newest.rate, force_min = newest.force, force_max = newest.force;
+  for (const Block& b : blocks_)
+  {
+    rate_min = rate_min.cwiseMin(b.rate);
+    rate_max = rate_max.cwiseMax(b.rate);
+    force_min = force_min.cwiseMin(b.force);
+    force_max = force_max.cwiseMax(b.force);
+  }
+  quiet_ = (rate_max - rate_min).maxCoeff() < kQuietRateRange && (force_max - force_min).maxCoeff() < kQuietForceRange;
 }
 
 void GyroAttitude::start(const Eigen::Vector3d& angular_rate, const Eigen::Vector3d& specific_force, double dt,

@@ -2,6 +2,7 @@
 // of it for samples without orientation.
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <random>
 #include <vector>
 
@@ -182,6 +183,52 @@ TEST(GyroAttitude, AStartAtRestTakesTheGyroBiasFromIt)
   EXPECT_TRUE(rolling.initialised());
   EXPECT_FALSE(rolling.startedAtRest());
   EXPECT_EQ(rolling.gyroBias(), Vector3::Zero());
+}
+
+TEST(GyroAttitude, AtRestTheGyroIsNotIntegrated)
+{
+  // A noisy gyro (0.006 rad/s per sample, as a real ADIS16405 at 100 Hz) whose bias wanders by
+  // 0.5 mrad/s over a minute, at rest for 10 min, tilted 0.05 rad about x. Integrated, its bias
+  // wander alone tilts the estimate by ~10 mrad; quiet, the tilt is the mean force's and the
+  // bias the mean rate. Then the sensor turns by 0.2 rad about x in 2 s: quiet ends at once and
+  // the gyro carries the turn.
+  std::mt19937_64 rng(8);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  const Quaternion tilt(Eigen::AngleAxisd(0.05, Vector3::UnitX()));
+  const Vector3 bias(0.007, -0.007, 0.004);
+  pbc::GyroAttitude attitude;
+  double worst = 0.0, quiet = 0.0, count = 0.0;
+  const int rest = static_cast<int>(600.0 * kRate);
+  for (int k = 0; k <= rest; ++k)
+  {
+    const double t = k / kRate;
+    const Vector3 wander = 5e-4 * Vector3(std::sin(2.0 * M_PI * t / 60.0), std::cos(2.0 * M_PI * t / 90.0), 0.0);
+    const Vector3 rate = bias + wander + 0.006 * Vector3(normal(rng), normal(rng), normal(rng));
+    const Vector3 force = tilt.conjugate() * Vector3(0, 0, pbc::kStandardGravity) +
+                          0.04 * Vector3(normal(rng), normal(rng), normal(rng));
+    attitude.update(rate, force, k == 0 ? 0.0 : 1.0 / kRate);
+    if (t >= 60.0)
+    {
+      worst = std::max(worst, tiltError(attitude.attitude(), tilt));
+      quiet += attitude.quiet() ? 1.0 : 0.0;
+      count += 1.0;
+    }
+  }
+  EXPECT_GT(quiet / count, 0.95);
+  EXPECT_LT(worst, 0.002) << "tilt error [rad] at rest after the first minute";
+  std::printf("[at rest] tilt error at most %.4f rad\n", worst);
+  EXPECT_LT((attitude.gyroBias() - bias).norm(), 0.002);
+
+  // The turn: 0.1 rad/s about x for 2 s.
+  Quaternion truth = tilt;
+  for (int k = 1; k <= static_cast<int>(2.0 * kRate); ++k)
+  {
+    truth = truth * Quaternion(Eigen::AngleAxisd(0.1 / kRate, Vector3::UnitX()));
+    const Vector3 rate = bias + Vector3(0.1, 0, 0) + 0.006 * Vector3(normal(rng), normal(rng), normal(rng));
+    attitude.update(rate, truth.conjugate() * Vector3(0, 0, pbc::kStandardGravity), 1.0 / kRate);
+  }
+  EXPECT_FALSE(attitude.quiet());
+  EXPECT_LT(tiltError(attitude.attitude(), truth), 0.01) << "after a 0.2 rad turn";
 }
 
 TEST(GyroAttitude, CompensatorLevelsSamplesWithoutOrientationWithIt)

@@ -333,13 +333,8 @@ TEST(RealWorldStreams, RealIMUsAtRestInventNoMotion)
                 name.c_str(), gyro.max_wave, gyro.max_filtered, frame.max_wave, frame.max_filtered);
     EXPECT_LE(frame.max_wave, 0.02) << name;
     EXPECT_LE(frame.max_filtered, 0.02) << name;
-    // The gyro attitude holds the targets on the MPU-6050 (it starts from a window at rest); on
-    // the ADIS16405 it does not yet (docs/algorithm.md, "Limits"): those figures are recorded.
-    if (name != "adis16405")
-    {
-      EXPECT_LE(gyro.max_wave, 0.02) << name;
-      EXPECT_LE(gyro.max_filtered, 0.02) << name;
-    }
+    EXPECT_LE(gyro.max_wave, 0.02) << name;
+    EXPECT_LE(gyro.max_filtered, 0.02) << name;
   }
 }
 
