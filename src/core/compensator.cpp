@@ -956,6 +956,15 @@ private:
     for (const auto& b : calibration_buffer_)
       *out = process(b.sample, b.dt);
     calibration_buffer_.clear();
+    // The replay's harmonic models filled over their first period, and the observer took that
+    // period's wave as slow motion: its position and velocity restart here, at the first
+    // published output (held at zero until now), with the bias it learned.
+    if (config_.mode == Mode::kDefault)
+      for (int i = 0; i < 3; ++i)
+      {
+        axes_[i].slow_p = axes_[i].slow_v = 0.0;
+        out->position_filtered[i] = out->velocity_filtered[i] = 0.0;
+      }
   }
 
   /// Offset of one axis over the calibration window: the mean when the window is at rest (paper
