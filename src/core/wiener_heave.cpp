@@ -88,8 +88,10 @@ WienerHeaveOutput WienerHeave::update(double a, double dt, double noise_density_
     return out;
   if (decimation_ == 0)
   {
-    if (!(dt > 0.0) || !std::isfinite(dt))
-      return out;  // the first sample's dt is unknown: wait for a step
+    // The first sample's dt is unknown: wait for a step. Periods outside kMinPeriod..kMaxPeriod
+    // (a glitch, not an IMU) would size the buffers absurdly: nothing is designed from them.
+    if (!(dt >= kMinPeriod && dt <= kMaxPeriod))
+      return out;
     dt_ = dt;
     decimation_ = std::max(1, static_cast<int>(std::lround(kDesignPeriod / dt)));
     first_.assign(decimation_, 0.0);

@@ -187,4 +187,16 @@ TEST(WienerHeave, FirstDesignResetAndCopy)
   EXPECT_EQ(heave.peakFrequency(), 0.0);
 }
 
+// A sample period no IMU has (a glitch, a fuzzed stream) sizes nothing: no output, no throw.
+TEST(WienerHeave, AbsurdPeriodsAreIgnored)
+{
+  for (double dt : { 1e-300, 1e-9, 20.0, 1e300, -1.0 })
+  {
+    WienerHeave heave;
+    for (int k = 0; k < 10; ++k)
+      EXPECT_FALSE(heave.update(0.1, dt, 1e-5).valid) << dt;
+    EXPECT_EQ(heave.decimation(), 0) << dt;
+  }
+}
+
 }  // namespace periodic_bias_compensation

@@ -58,6 +58,8 @@ public:
   static constexpr double kMaxSpan = 120.0;        ///< [s]
   static constexpr double kNoiseMargin = 3.0;      ///< multiples of the noise floor taken as noise
   static constexpr double kDesignFade = 2.0;       ///< [s]
+  static constexpr double kMinPeriod = 1e-4;       ///< shortest sample period taken (10 kHz) [s]
+  static constexpr double kMaxPeriod = 10.0;       ///< longest [s]
 
   /// min_frequency [Hz]: the lowest wave frequency; below it nothing is heave.
   explicit WienerHeave(double min_frequency = 0.04);
