@@ -42,6 +42,14 @@ constexpr double kWeightTime = 2.0;
 /// Lowest wave frequency relative to min_frequency (the lowest peak searched): a wind sea or a
 /// swell holds almost no energy below 0.6 times its peak frequency [-].
 constexpr double kWaveBandEdge = 0.6;
+/// Yaw rate averaging [s], the averaged rate beyond which the ship turns [rad/s] (wave-induced
+/// yaw of a few degrees at 5-15 s averages to a few mrad/s) and the time after a turn during which
+/// the horizontal axes keep no broadband wave (the spectral FIR spans up to 120 s) [s].
+constexpr double kTurnAveraging = 2.0;
+constexpr double kTurnRate = 0.008;
+constexpr double kAfterTurn = 120.0;
+/// Time constant with which a turn fades the horizontal broadband wave out [s].
+constexpr double kTurnFade = 0.3;
 /// Most Euler steps of the slow-motion observer per sample (stepDefault).
 constexpr int kMaxObserverSteps = 10000;
 /// Highest sample rate planned for [Hz]: a stamp step far below any IMU's period (a driver
@@ -492,10 +500,15 @@ public:
                                 config.max_frequency != config_.max_frequency ||
                                 config.harmonics != config_.harmonics;
     const bool restart_heave = config.heave_filter != config_.heave_filter ||
-                               config.heave_corner_frequency != config_.heave_corner_frequency;
+                               config.heave_corner_frequency != config_.heave_corner_frequency ||
+                               config.min_frequency != config_.min_frequency;
     config_ = config;
     if (restart_heave)
-      axes_[2].heave.setCornerFrequency(config_.heave_corner_frequency);
+      for (AxisEstimator& axis : axes_)
+      {
+        axis.heave.setCornerFrequency(config_.heave_corner_frequency);
+        axis.spectral_heave.setMinFrequency(kWaveBandEdge * config_.min_frequency);
+      }
     if (restart_search && rate_ > 0.0)
     {
       planned_rate_ = rate_;
@@ -803,6 +816,7 @@ private:
   /// Forgets the integrated motion and period search, keeps bias, level and sample rate.
   void resetMotion()
   {
+    turn_rate_ = since_turn_ = 0.0;
     for (auto& axis : axes_)
     {
       if (axis.tracker)
@@ -1013,6 +1027,15 @@ private:
     now_ = s.t;
     out.orientation = s.has_orientation ? s.orientation : level_;
     const Vector3 a = levelAcceleration(s);
+    {
+      const double yaw_rate = (out.orientation * s.angular_rate).z();
+      turn_rate_ += (dt > 0.0 ? std::min(1.0, dt / kTurnAveraging) : 0.0) * (yaw_rate - turn_rate_);
+      since_turn_ = std::abs(turn_rate_) > kTurnRate ? 0.0 : since_turn_ + dt;
+      // With one level frame the hull's roll and pitch leak g sin(angle) into the level axes in
+      // the wave band: no horizontal broadband wave then.
+      if (!s.has_orientation)
+        since_turn_ = 0.0;
+    }
 
     // Until the window ends the bias is provisional: the running mean of the level acceleration.
     if (!calibrated_ && config_.enable_constant)
@@ -1187,17 +1210,21 @@ private:
   /// The broadband share V_missed / (V_missed + V_filter), zero below kMinHeaveWeight, is followed
   /// with kWeightTime: a narrow sea (the bench) or none (at rest) keeps the harmonic model
   /// whatever the bias does; a broad one (JONSWAP) takes the broadband heave.
-  void broadbandHeave(AxisEstimator& axis, double raw, double residual, double dt, double* wave_a, double* wave_x,
-                      double* wave_v, double* weight)
+  /// The horizontal axes (surge and sway in the level frame) take only the spectral estimate,
+  /// which passes nothing below the wave band, and none while the ship turns or for kAfterTurn
+  /// after (a turn's centripetal acceleration lies at the band's lower edge), faded out with
+  /// kTurnFade, nor with one level frame (no attitude: the roll leaks into them).
+  void broadbandHeave(AxisEstimator& axis, int i, double raw, double residual, double dt, double* wave_a,
+                      double* wave_x, double* wave_v, double* weight)
   {
     // The measured acceleration less the calibrated offset (fixed once calibrated, so no loop with
     // the drift observer): gravity mismatch and bias are no step into the filter at its start.
-    const double vertical = raw - (calibrated_ ? constant_bias_[2] : 0.0);
-    HeaveOutput heave = axis.heave.update(vertical, dt);
+    const double offset_free = raw - (calibrated_ ? constant_bias_[i] : 0.0);
+    HeaveOutput heave = axis.heave.update(offset_free, dt);
     // Once the spectrum has been measured, the Wiener filter designed from it replaces the fixed
     // filter's displacement and velocity (its acceleration is the wave band's either way).
     const double density = 2.0 * axis.noise_variance * (rate_ > 0.0 ? 1.0 / rate_ : 0.0);
-    const WienerHeaveOutput spectral = axis.spectral_heave.update(vertical, dt, density);
+    const WienerHeaveOutput spectral = axis.spectral_heave.update(offset_free, dt, density);
     axis.heave_error_variance = axis.heave.positionVariance(density);
     axis.heave_velocity_variance = axis.heave.velocityVariance(density);
     if (spectral.valid)
@@ -1261,13 +1288,16 @@ private:
       const double filter = axis.heave_error_variance +
                             std::max(axis.heave_low_variance, axis.heave_low.back() * axis.heave_low.back());
       target = missed > 0.0 ? missed / (missed + filter) : 0.0;
+      if (i != 2 && (!spectral.valid || since_turn_ < kAfterTurn))
+        target = 0.0;
       // A share of a few percent gains little and adds that share of everything the filter passes
       // below the wave band, which can be metres of bias wander.
       if (target < kMinHeaveWeight)
         target = 0.0;
     }
     if (dt > 0.0)
-      axis.heave_weight += (1.0 - std::exp(-dt / kWeightTime)) * (target - axis.heave_weight);
+      axis.heave_weight +=
+          (1.0 - std::exp(-dt / (i != 2 && since_turn_ < kAfterTurn ? kTurnFade : kWeightTime))) * (target - axis.heave_weight);
     *weight = axis.heave_weight;
     *wave_a += *weight * (heave.acceleration - *wave_a);
     *wave_x += *weight * (heave.position - *wave_x);
@@ -1374,8 +1404,8 @@ private:
     fadePreviousModel(axis, dt, &wave_a, &wave_x, &wave_v);
 
     double heave_weight = 0.0;
-    if (i == 2 && config_.heave_filter && config_.enable_periodic)
-      broadbandHeave(axis, raw, residual, dt, &wave_a, &wave_x, &wave_v, &heave_weight);
+    if (config_.heave_filter && config_.enable_periodic)
+      broadbandHeave(axis, i, raw, residual, dt, &wave_a, &wave_x, &wave_v, &heave_weight);
 
     // Fourth-order observer, poles at -w (characteristic (s + w)^4): position, velocity, the
     // bias and its rate. p / a = s^2 / (s + w)^4, so a constant bias and one that changes at a
@@ -1498,6 +1528,9 @@ private:
   int hop_samples_ = 1;
   int since_analysis_ = 0;
   double now_ = 0.0;  ///< time of the sample being processed [s]
+  double turn_rate_ = 0.0;     ///< level-frame yaw rate averaged over kTurnAveraging [rad/s]
+  double since_turn_ = 0.0;    ///< time since it last exceeded kTurnRate, or since the last
+                               ///< sample without an attitude [s]
 
   bool has_level_ = false;
   bool level_calibrated_ = false;
