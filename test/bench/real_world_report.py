@@ -23,7 +23,8 @@ def properties(path):
 
 
 def seeds(values, prefix):
-    return [values[k] for k in sorted(values, key=lambda k: int(k.rsplit('_', 1)[1])) if k.startswith(prefix)]
+    return [values[k] for k in sorted(values, key=lambda k: int(k.rsplit('_', 1)[1]))
+            if k.startswith(prefix) and k[len(prefix):].isdigit()]
 
 
 def main():
@@ -50,6 +51,12 @@ def main():
           % ' '.join('%.2f' % v for v in seeds(sea, 'heave_error_percent_hs_clean_')))
     print('| moored JONSWAP, 15 min, RW 6e-4 m/s^2/sqrt(s) | heave RMS error [%% of Hs] | median <= 4, worst <= 6 | %s |'
           % ' '.join('%.2f' % v for v in seeds(sea, 'heave_error_percent_hs_random_walk_')))
+    horizontal = tests.get('MooredBroadSeaSurgeAndSway', {})
+    for axis in ('surge', 'sway'):
+        print('| moored sea, horizontal motion not locked to heave, 30 min, RW 6e-4 | %s RMS error [%% of true] '
+              '(harmonic model alone) | < 35 and < half of it | %s |'
+              % (axis, ' '.join('%.1f (%.1f)' % (100 * v, 100 * w) for v, w in
+                                zip(seeds(horizontal, axis + '_error_'), seeds(horizontal, axis + '_error_harmonic_')))))
     for name, label in (('adis16405', 'ADIS16405 at rest, 10 min'), ('mpu6050_100s', 'MPU-6050 at rest, 100 s'),
                         ('mpu6050_449s', 'MPU-6050 at rest, 449 s')):
         if name + '_gyro_attitude_max_wave' not in real:
