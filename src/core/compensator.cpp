@@ -1,6 +1,5 @@
 #include "periodic_bias_compensation/core/compensator.h"
-#include "periodic_bias_compensation/core/heave_filter.h"
-#include "periodic_bias_compensation/core/wiener_heave.h"
+#include "periodic_bias_compensation/core/broadband_wave.h"
 
 #include <algorithm>
 #include <cmath>
@@ -22,34 +21,18 @@ constexpr std::size_t kFrequencyHistory = 20;
 constexpr double kMaxFrequencySlope = 0.01;
 /// Largest relative change of the frequency extrapolated from the last FFT estimate [-].
 constexpr double kMaxExtrapolation = 0.15;
-/// Time constant of the variances that weigh the broadband heave (broadbandHeave) [s].
-constexpr double kHeaveAveraging = 60.0;
 /// Periods of a held lock the FFT window must span before an estimate 20 % away replaces it.
 constexpr double kResolvePeriods = 10.0;
 /// Time constant with which the model of a changed or lost lock fades out [s].
 constexpr double kFadeTime = 2.0;
 /// Weight below which a fading model is dropped [-].
 constexpr double kFadeEnd = 1e-3;
-/// First-order high-passes at min_frequency on the harmonic model's residual before it is taken
-/// as missed heave (its constant follows a bias drift of a minute's period with a lag that,
-/// doubly integrated, would read as heave): two cut such a drift tenfold.
-constexpr int kResidualStages = 2;
-/// Smallest share of the broadband heave in the wave output; below it, none [-].
-constexpr double kMinHeaveWeight = 0.1;
-/// Time constant with which the broadband heave's weight follows its target [s]: a lock gained or
-/// lost fades it in or out, never steps it.
-constexpr double kWeightTime = 2.0;
-/// Lowest wave frequency relative to min_frequency (the lowest peak searched): a wind sea or a
-/// swell holds almost no energy below 0.6 times its peak frequency [-].
-constexpr double kWaveBandEdge = 0.6;
 /// Yaw rate averaging [s], the averaged rate beyond which the ship turns [rad/s] (wave-induced
 /// yaw of a few degrees at 5-15 s averages to a few mrad/s) and the time after a turn during which
 /// the horizontal axes keep no broadband wave (the spectral FIR spans up to 120 s) [s].
 constexpr double kTurnAveraging = 2.0;
 constexpr double kTurnRate = 0.008;
 constexpr double kAfterTurn = 120.0;
-/// Time constant with which a turn fades the horizontal broadband wave out [s].
-constexpr double kTurnFade = 0.3;
 /// Most Euler steps of the slow-motion observer per sample (stepDefault).
 constexpr int kMaxObserverSteps = 10000;
 /// Highest sample rate planned for [Hz]: a stamp step far below any IMU's period (a driver
@@ -449,26 +432,8 @@ struct AxisEstimator
   double slow_p = 0.0, slow_v = 0.0, bias = 0.0;
   double bias_rate = 0.0;  ///< [m/s^3]
   double residual_variance = 0.0;
-  // Default mode, vertical axis with heave_filter (broadbandHeave): the broadband heave, the
-  // variance of its difference from the harmonic model's, and the white noise variance per sample.
-  HeaveFilter heave;
-  WienerHeave spectral_heave;         ///< replaces heave's displacement once designed
-  double heave_error_variance = 0.0;  ///< of the broadband heave in use [m^2]
-  double heave_velocity_variance = 0.0;  ///< [m^2/s^2]
-  struct HighPass
-  {
-    double input = 0.0, output = 0.0;
-  };
-  std::array<HighPass, kResidualStages> residual_high{};  ///< the harmonic model's residual above the band edge
-  HeaveFilter residual_heave;         ///< the residual's displacement
-  double residual_band_variance = 0.0;
-  double residual_samples = 0.0;      ///< in residual_band_variance since the lock
-  double heave_samples = 0.0;         ///< in noise_variance and heave_low_variance
-  double heave_weight = 0.0;          ///< the broadband heave's share of the wave output
-  std::array<double, 2> heave_low{};  ///< the heave filter's output below the wave band
-  double heave_low_variance = 0.0;
-  double previous_raw = NAN;
-  double noise_variance = 0.0;
+  // Default mode with heave_filter: the broadband wave estimate and its share (broadbandWave).
+  BroadbandWave broadband;
 
   // Paper mode: integrals, period tables, drift terms.
   double paper_v = 0.0, paper_y = 0.0;
@@ -505,10 +470,7 @@ public:
     config_ = config;
     if (restart_heave)
       for (AxisEstimator& axis : axes_)
-      {
-        axis.heave.setCornerFrequency(config_.heave_corner_frequency);
-        axis.spectral_heave.setMinFrequency(kWaveBandEdge * config_.min_frequency);
-      }
+        axis.broadband.configure(config_.heave_corner_frequency, config_.min_frequency);
     if (restart_search && rate_ > 0.0)
     {
       planned_rate_ = rate_;
@@ -832,19 +794,7 @@ private:
       axis.slow_p = axis.slow_v = 0.0;
       axis.bias_rate = 0.0;
       axis.residual_variance = 0.0;
-      axis.heave.setCornerFrequency(config_.heave_corner_frequency);
-      axis.spectral_heave.setMinFrequency(kWaveBandEdge * config_.min_frequency);
-      axis.heave_error_variance = axis.heave_velocity_variance = 0.0;
-      axis.residual_high = {};
-      axis.residual_heave.setCornerFrequency(config_.heave_corner_frequency);
-      axis.residual_band_variance = 0.0;
-      axis.residual_samples = 0.0;
-      axis.heave_samples = 0.0;
-      axis.heave_weight = 0.0;
-      axis.heave_low = {};
-      axis.heave_low_variance = 0.0;
-      axis.previous_raw = NAN;
-      axis.noise_variance = 0.0;
+      axis.broadband = BroadbandWave(&axis == &axes_[2], config_.heave_corner_frequency, config_.min_frequency);
       axis.paper_v = axis.paper_y = 0.0;
       axis.d_v = axis.d_p = 0.0;
       axis.v_table.clear();
@@ -1196,112 +1146,36 @@ private:
     *v_mean = axis.v_sum / std::max(1, window);
   }
 
-  /// Default mode, vertical axis (heave_filter): the harmonic model describes one period; a broad
-  /// sea leaves most of its heave out. The double integral over the whole wave band (HeaveFilter)
-  /// has other errors instead: the accelerometer's white noise through the filter, and whatever
-  /// it passes below the wave band (bias wander, levelling errors), which it cannot tell from
-  /// heave. The two are blended by inverse variance:
-  ///  - what the harmonic model misses is measured where bias wander is not: its residual
-  ///    acceleration above min_frequency (kResidualStages first-order high-passes), integrated
-  ///    by a second HeaveFilter, its variance less that of the white noise through both;
-  ///  - the filter's error is the white noise through it plus its output below the wave band
-  ///    (two first-order low-passes at half the lowest wave frequency searched), as averaged or
-  ///    as it is now, whichever is larger (bias wander grows faster than a mean follows).
-  /// The broadband share V_missed / (V_missed + V_filter), zero below kMinHeaveWeight, is followed
-  /// with kWeightTime: a narrow sea (the bench) or none (at rest) keeps the harmonic model
-  /// whatever the bias does; a broad one (JONSWAP) takes the broadband heave.
-  /// The horizontal axes (surge and sway in the level frame) take only the spectral estimate,
-  /// which passes nothing below the wave band, and none while the ship turns or for kAfterTurn
-  /// after (a turn's centripetal acceleration lies at the band's lower edge), faded out with
-  /// kTurnFade, nor with one level frame (no attitude: the roll leaks into them).
-  void broadbandHeave(AxisEstimator& axis, int i, double raw, double residual, double dt, double* wave_a,
-                      double* wave_x, double* wave_v, double* weight)
+  /// Default mode with heave_filter: the broadband wave estimate of axis i (BroadbandWave),
+  /// blended into the harmonic model's wave output by its share. A horizontal axis may take a
+  /// share only when the ship has not turned for kAfterTurn (a turn's centripetal acceleration
+  /// lies at the wave band's lower edge) and the sample had an attitude (with one level frame
+  /// the roll leaks g sin(roll) into the level axes in the wave band).
+  BroadbandWaveOutput broadbandWave(AxisEstimator& axis, int i, double raw, double residual, double dt,
+                                    double* wave_a, double* wave_x, double* wave_v)
   {
+    BroadbandWaveInput in;
+    in.raw = raw;
     // The measured acceleration less the calibrated offset (fixed once calibrated, so no loop with
-    // the drift observer): gravity mismatch and bias are no step into the filter at its start.
-    const double offset_free = raw - (calibrated_ ? constant_bias_[i] : 0.0);
-    HeaveOutput heave = axis.heave.update(offset_free, dt);
-    // Once the spectrum has been measured, the Wiener filter designed from it replaces the fixed
-    // filter's displacement and velocity (its acceleration is the wave band's either way).
-    const double density = 2.0 * axis.noise_variance * (rate_ > 0.0 ? 1.0 / rate_ : 0.0);
-    const WienerHeaveOutput spectral = axis.spectral_heave.update(offset_free, dt, density);
-    axis.heave_error_variance = axis.heave.positionVariance(density);
-    axis.heave_velocity_variance = axis.heave.velocityVariance(density);
-    if (spectral.valid)
-    {
-      heave.position = spectral.position;
-      heave.velocity = spectral.velocity;
-      axis.heave_error_variance = spectral.error_variance;
-      axis.heave_velocity_variance = spectral.velocity_error_variance;
-    }
-    if (dt > 0.0)
-    {
-      const double minute = 1.0 - std::exp(-dt / kHeaveAveraging);
-      // White noise of variance sigma^2 per sample: E[(a_k - a_k-1)^2] = 2 sigma^2 (a wave
-      // changes little in one sample).
-      // Plain means over the first minute, then moving ones (an exponential mean started at
-      // zero would read low for a minute).
-      axis.heave_samples += 1.0;
-      const double average = std::max(minute, 1.0 / axis.heave_samples);
-      if (std::isfinite(axis.previous_raw))
-      {
-        const double step = raw - axis.previous_raw;
-        axis.noise_variance += average * (0.5 * step * step - axis.noise_variance);
-      }
-      // Only against a locked model (before the first lock the residual is the whole wave): the
-      // residual above the wave band's lower edge (kResidualStages first-order high-passes at
-      // min_frequency), integrated by a copy of the heave filter, its variance a plain mean over
-      // the first minute, then the moving one.
-      if (axis.locked)
-      {
-        const double high = std::exp(-dt * 2.0 * M_PI * config_.min_frequency);
-        double band = residual;
-        for (auto& stage : axis.residual_high)
-        {
-          stage.output = axis.residual_samples > 0.0 ? high * (stage.output + band - stage.input) : 0.0;
-          stage.input = band;
-          band = stage.output;
-        }
-        const double missed = axis.residual_heave.update(band, axis.residual_samples > 0.0 ? dt : 0.0).position;
-        axis.residual_samples += 1.0;
-        axis.residual_band_variance +=
-            std::max(minute, 1.0 / axis.residual_samples) * (missed * missed - axis.residual_band_variance);
-      }
-      const double low = 1.0 - std::exp(-dt * M_PI * config_.min_frequency);
-      double below = heave.position;
-      for (double& stage : axis.heave_low)
-        below = stage += low * (below - stage);
-      axis.heave_low_variance += average * (below * below - axis.heave_low_variance);
-    }
-    axis.previous_raw = raw;
-    const double noise_density = 2.0 * axis.noise_variance * (rate_ > 0.0 ? 1.0 / rate_ : 0.0);
-    double target = 0.0;
-    {
-      // Less the white noise through the high-passes and the filter (about 1 / s^2 there):
-      // n^2 integral of df / (omega^2 + omega_h^2)^2 = n^2 / (8 omega_h^3) for two stages.
-      static_assert(kResidualStages == 2, "the noise floor below is that of two stages");
-      const double omega_h = 2.0 * M_PI * config_.min_frequency;
-      const double missed =
-          std::max(0.0, axis.residual_band_variance - noise_density / (8.0 * omega_h * omega_h * omega_h));
-      // The filter's output below the band as it is now, when larger than its average: bias
-      // wander grows faster than a minute's mean follows.
-      const double filter = axis.heave_error_variance +
-                            std::max(axis.heave_low_variance, axis.heave_low.back() * axis.heave_low.back());
-      target = missed > 0.0 ? missed / (missed + filter) : 0.0;
-      if (i != 2 && (!spectral.valid || since_turn_ < kAfterTurn))
-        target = 0.0;
-      // A share of a few percent gains little and adds that share of everything the filter passes
-      // below the wave band, which can be metres of bias wander.
-      if (target < kMinHeaveWeight)
-        target = 0.0;
-    }
-    if (dt > 0.0)
-      axis.heave_weight +=
-          (1.0 - std::exp(-dt / (i != 2 && since_turn_ < kAfterTurn ? kTurnFade : kWeightTime))) * (target - axis.heave_weight);
-    *weight = axis.heave_weight;
-    *wave_a += *weight * (heave.acceleration - *wave_a);
-    *wave_x += *weight * (heave.position - *wave_x);
-    *wave_v += *weight * (heave.velocity - *wave_v);
+    // the drift observer): gravity mismatch and bias are no step into the filters at their start.
+    in.offset_free = offsetFree(raw, i);
+    in.residual = residual;
+    in.locked = axis.locked;
+    in.allowed = since_turn_ >= kAfterTurn;
+    in.dt = dt;
+    in.rate = rate_;
+    const BroadbandWaveOutput out = axis.broadband.update(in);
+    *wave_a += out.weight * (out.estimate.acceleration - *wave_a);
+    *wave_x += out.weight * (out.estimate.position - *wave_x);
+    *wave_v += out.weight * (out.estimate.velocity - *wave_v);
+    return out;
+  }
+
+  /// The level acceleration of axis i less the calibrated constant offset (none before
+  /// calibration).
+  double offsetFree(double raw, int i) const
+  {
+    return raw - (calibrated_ ? constant_bias_[i] : 0.0);
   }
 
   /// A new lock (or one that moved): the harmonic model starts over at the new frequency, fitted
@@ -1380,8 +1254,8 @@ private:
       // Fitted to the acceleration less the calibrated offset, not less the drift observer's
       // moving bias: the model's own constant follows slow bias, and the observer's bias, which
       // follows acceleration up to about 1 / (2 pi drift_time_constant), stays out of its residual.
-      residual = axis.harmonic.update(axis.phase, raw - (calibrated_ ? constant_bias_[i] : 0.0), lambda);
-      axis.raw_history.push(raw - (calibrated_ ? constant_bias_[i] : 0.0));
+      residual = axis.harmonic.update(axis.phase, offsetFree(raw, i), lambda);
+      axis.raw_history.push(offsetFree(raw, i));
       const double beta = 1.0 - lambda;
       axis.residual_variance = (1.0 - beta) * axis.residual_variance + beta * residual * residual;
       // A fit of less than one period is not yet a description of the oscillation.
@@ -1394,7 +1268,7 @@ private:
     }
     else
     {
-      axis.raw_history.push(raw - (calibrated_ ? constant_bias_[i] : 0.0));
+      axis.raw_history.push(offsetFree(raw, i));
       if (dt > 0.0)
       {
         const double beta = 1.0 - std::exp(-dt / config_.harmonic_memory);
@@ -1403,9 +1277,9 @@ private:
     }
     fadePreviousModel(axis, dt, &wave_a, &wave_x, &wave_v);
 
-    double heave_weight = 0.0;
+    BroadbandWaveOutput broadband;
     if (config_.heave_filter && config_.enable_periodic)
-      broadbandHeave(axis, i, raw, residual, dt, &wave_a, &wave_x, &wave_v, &heave_weight);
+      broadband = broadbandWave(axis, i, raw, residual, dt, &wave_a, &wave_x, &wave_v);
 
     // Fourth-order observer, poles at -w (characteristic (s + w)^4): position, velocity, the
     // bias and its rate. p / a = s^2 / (s + w)^4, so a constant bias and one that changes at a
@@ -1452,13 +1326,13 @@ private:
     const double density = 2.0 * axis.residual_variance * (rate_ > 0.0 ? 1.0 / rate_ : 0.0);
     out->position_variance[i] = density / (64.0 * w * w * w);
     out->velocity_variance[i] = 5.0 * density / (64.0 * w);
-    // The blend's variance (broadbandHeave), errors taken as independent.
-    const double harmonic_share = (1.0 - heave_weight) * (1.0 - heave_weight);
-    const double heave_share = heave_weight * heave_weight;
+    // The blend's variance (broadbandWave), errors taken as independent.
+    const double harmonic_share = (1.0 - broadband.weight) * (1.0 - broadband.weight);
+    const double broadband_share = broadband.weight * broadband.weight;
     out->wave_position_variance[i] = harmonic_share * axis.residual_variance * variance_factor +
-                                     heave_share * axis.heave_error_variance;
+                                     broadband_share * broadband.position_variance;
     out->wave_velocity_variance[i] = harmonic_share * axis.residual_variance * velocity_variance_factor +
-                                     heave_share * axis.heave_velocity_variance;
+                                     broadband_share * broadband.velocity_variance;
   }
 
   /// Paper mode, Eq. 1-7 with the decisions of docs/algorithm.md: integrals on the corrected

@@ -1,0 +1,107 @@
+// Broadband wave motion of one level axis, and its share against the harmonic model (estimation
+// core, no ROS).
+//
+// The harmonic model of the default mode describes one dominant period; a broad sea leaves much
+// of the wave out. BroadbandWave estimates the whole wave band instead, from the acceleration less
+// the calibrated offset: the spectral (Wiener) estimate once it is designed (WienerHeave), before
+// that, on the vertical axis only, the fixed double integrator (HeaveFilter). The two estimates
+// are blended by inverse variance:
+//  - what the harmonic model misses is measured where bias wander is not: its residual
+//    acceleration above min_frequency (two first-order high-passes, only against a locked
+//    model), integrated by a second HeaveFilter, its variance less that of the white noise
+//    through both;
+//  - the broadband error is its own (the noise through the fixed filter, or the Wiener design's
+//    expected error) plus its output below the wave band (two first-order low-passes at half
+//    min_frequency), as averaged or as it is now, whichever is larger (bias wander grows faster
+//    than a mean follows);
+//  - the broadband share V_missed / (V_missed + V_broadband), zero below kMinWeight, is followed
+//    with kWeightTime: a narrow sea (the bench) or none (at rest) keeps the harmonic model
+//    whatever the bias does; a broad one (JONSWAP) takes the broadband estimate.
+// A horizontal axis takes the spectral estimate only, and none while the owner says it may not
+// (a ship turning, no attitude): its share then fades out with kBlockedFade.
+//
+// Threading: not thread-safe; the owner serialises calls.
+#pragma once
+
+#include <array>
+#include <cmath>
+
+#include "periodic_bias_compensation/core/heave_filter.h"
+#include "periodic_bias_compensation/core/wiener_heave.h"
+
+namespace periodic_bias_compensation
+{
+/// One sample of one axis, as the owner has it.
+struct BroadbandWaveInput
+{
+  double raw = 0.0;          ///< level acceleration, gravity removed [m/s^2]
+  double offset_free = 0.0;  ///< raw less the calibrated constant offset (fixed once calibrated)
+  double residual = 0.0;     ///< what the harmonic model leaves of the acceleration [m/s^2]
+  bool locked = false;       ///< the harmonic model has a lock
+  bool allowed = true;       ///< a horizontal axis may take a broadband share now
+  double dt = 0.0;           ///< [s] since the previous sample (0: the first)
+  double rate = 0.0;         ///< sample rate [Hz] (0: not known yet)
+};
+
+struct BroadbandWaveOutput
+{
+  HeaveOutput estimate;            ///< broadband displacement, velocity, wave-band acceleration
+  double weight = 0.0;             ///< its share of the wave output [-]
+  double position_variance = 0.0;  ///< of the broadband estimate [m^2]
+  double velocity_variance = 0.0;  ///< [m^2/s^2]
+};
+
+class BroadbandWave
+{
+public:
+  /// Time constant of the variances that weigh the broadband estimate [s].
+  static constexpr double kAveraging = 60.0;
+  /// Smallest share; below it, none [-]: a few percent gain little and add that share of
+  /// everything below the wave band, which can be metres of bias wander.
+  static constexpr double kMinWeight = 0.1;
+  /// Time constant with which the share follows its target [s]: never a step.
+  static constexpr double kWeightTime = 2.0;
+  /// Time constant with which a horizontal share fades out when it is no longer allowed [s].
+  static constexpr double kBlockedFade = 0.3;
+  /// Lowest wave frequency relative to min_frequency (the lowest peak searched): a wind sea or a
+  /// swell holds almost no energy below 0.6 times its peak frequency [-].
+  static constexpr double kBandEdge = 0.6;
+
+  /// vertical: the fixed filter stands in until the spectral estimate is designed.
+  explicit BroadbandWave(bool vertical = true, double corner_frequency = 0.015, double min_frequency = 0.05);
+
+  /// Forgets everything (filters, variances, share).
+  void reset();
+  void configure(double corner_frequency, double min_frequency);
+
+  BroadbandWaveOutput update(const BroadbandWaveInput& in);
+
+  /// White-noise density of the acceleration squared, one-sided, from first differences
+  /// [(m/s^2)^2/Hz] at `rate`.
+  double noiseDensitySquared(double rate) const
+  {
+    return 2.0 * noise_variance_ * (rate > 0.0 ? 1.0 / rate : 0.0);
+  }
+
+private:
+  struct HighPass
+  {
+    double input = 0.0, output = 0.0;
+  };
+  bool vertical_;
+  double min_frequency_;
+  HeaveFilter fixed_;
+  WienerHeave spectral_;
+  std::array<HighPass, 2> residual_high_{};  ///< the harmonic model's residual above the band edge
+  HeaveFilter residual_heave_;               ///< the residual's displacement
+  double residual_band_variance_ = 0.0;
+  double residual_samples_ = 0.0;            ///< in residual_band_variance_ since the lock
+  double samples_ = 0.0;                     ///< in noise_variance_ and low_variance_
+  double weight_ = 0.0;
+  std::array<double, 2> low_{};              ///< the broadband output below the wave band
+  double low_variance_ = 0.0;
+  double previous_raw_ = NAN;
+  double noise_variance_ = 0.0;              ///< white noise per sample [(m/s^2)^2]
+};
+
+}  // namespace periodic_bias_compensation

@@ -1,0 +1,112 @@
+#include "periodic_bias_compensation/core/broadband_wave.h"
+
+#include <algorithm>
+
+namespace periodic_bias_compensation
+{
+BroadbandWave::BroadbandWave(bool vertical, double corner_frequency, double min_frequency)
+  : vertical_(vertical), min_frequency_(min_frequency)
+{
+  configure(corner_frequency, min_frequency);
+}
+
+void BroadbandWave::configure(double corner_frequency, double min_frequency)
+{
+  min_frequency_ = min_frequency;
+  fixed_.setCornerFrequency(corner_frequency);
+  residual_heave_.setCornerFrequency(corner_frequency);
+  spectral_.setMinFrequency(kBandEdge * min_frequency);
+  reset();
+}
+
+void BroadbandWave::reset()
+{
+  fixed_.reset();
+  spectral_.reset();
+  residual_heave_.reset();
+  residual_high_ = {};
+  residual_band_variance_ = 0.0;
+  residual_samples_ = 0.0;
+  samples_ = 0.0;
+  weight_ = 0.0;
+  low_ = {};
+  low_variance_ = 0.0;
+  previous_raw_ = NAN;
+  noise_variance_ = 0.0;
+}
+
+BroadbandWaveOutput BroadbandWave::update(const BroadbandWaveInput& in)
+{
+  const double dt = in.dt;
+  BroadbandWaveOutput out;
+  out.estimate = fixed_.update(in.offset_free, dt);
+  // Once the spectrum has been measured, the Wiener filter designed from it replaces the fixed
+  // filter's displacement and velocity (its acceleration is the wave band's either way).
+  const double density = noiseDensitySquared(in.rate);
+  const WienerHeaveOutput spectral = spectral_.update(in.offset_free, dt, density);
+  out.position_variance = fixed_.positionVariance(density);
+  out.velocity_variance = fixed_.velocityVariance(density);
+  if (spectral.valid)
+  {
+    out.estimate.position = spectral.position;
+    out.estimate.velocity = spectral.velocity;
+    out.position_variance = spectral.error_variance;
+    out.velocity_variance = spectral.velocity_error_variance;
+  }
+  if (dt > 0.0)
+  {
+    const double minute = 1.0 - std::exp(-dt / kAveraging);
+    // Plain means over the first minute, then moving ones (an exponential mean started at zero
+    // would read low for a minute).
+    samples_ += 1.0;
+    const double average = std::max(minute, 1.0 / samples_);
+    // White noise of variance sigma^2 per sample: E[(a_k - a_k-1)^2] = 2 sigma^2 (a wave changes
+    // little in one sample).
+    if (std::isfinite(previous_raw_))
+    {
+      const double step = in.raw - previous_raw_;
+      noise_variance_ += average * (0.5 * step * step - noise_variance_);
+    }
+    // Only against a locked model (before the first lock the residual is the whole wave).
+    if (in.locked)
+    {
+      const double high = std::exp(-dt * 2.0 * M_PI * min_frequency_);
+      double band = in.residual;
+      for (auto& stage : residual_high_)
+      {
+        stage.output = residual_samples_ > 0.0 ? high * (stage.output + band - stage.input) : 0.0;
+        stage.input = band;
+        band = stage.output;
+      }
+      const double missed = residual_heave_.update(band, residual_samples_ > 0.0 ? dt : 0.0).position;
+      residual_samples_ += 1.0;
+      residual_band_variance_ +=
+          std::max(minute, 1.0 / residual_samples_) * (missed * missed - residual_band_variance_);
+    }
+    const double low = 1.0 - std::exp(-dt * M_PI * min_frequency_);
+    double below = out.estimate.position;
+    for (double& stage : low_)
+      below = stage += low * (below - stage);
+    low_variance_ += average * (below * below - low_variance_);
+  }
+  previous_raw_ = in.raw;
+
+  // Less the white noise through the two high-passes and the filter (about 1 / s^2 there):
+  // n^2 integral of df / (omega^2 + omega_h^2)^2 = n^2 / (8 omega_h^3).
+  const double omega_h = 2.0 * M_PI * min_frequency_;
+  const double missed =
+      std::max(0.0, residual_band_variance_ - noiseDensitySquared(in.rate) / (8.0 * omega_h * omega_h * omega_h));
+  const double broadband = out.position_variance + std::max(low_variance_, low_.back() * low_.back());
+  double target = missed > 0.0 ? missed / (missed + broadband) : 0.0;
+  const bool blocked = !vertical_ && !in.allowed;
+  if (!vertical_ && (!spectral.valid || blocked))
+    target = 0.0;
+  if (target < kMinWeight)
+    target = 0.0;
+  if (dt > 0.0)
+    weight_ += (1.0 - std::exp(-dt / (blocked ? kBlockedFade : kWeightTime))) * (target - weight_);
+  out.weight = weight_;
+  return out;
+}
+
+}  // namespace periodic_bias_compensation
