@@ -1,6 +1,7 @@
 #include "periodic_bias_compensation/core/compensator.h"
 #include "periodic_bias_compensation/core/broadband_wave.h"
 #include "periodic_bias_compensation/core/harmonic_model.h"
+#include "periodic_bias_compensation/core/paper_loop.h"
 
 #include <algorithm>
 #include <cmath>
@@ -209,14 +210,13 @@ struct AxisEstimator
   // Default mode with heave_filter: the broadband wave estimate and its share (broadbandWave).
   BroadbandWave broadband;
 
-  // Paper mode: integrals, period tables, drift terms.
-  double paper_v = 0.0, paper_y = 0.0;
-  double d_v = 0.0, d_p = 0.0;
-  double constant_d_p = 0.0;  ///< mean velocity of the calibration window [m/s] (Table 1)
-  SignalHistory v_table, y_table;
   SignalHistory raw_history;  ///< default mode: the harmonic model's input over the longest period
-  double y_sum = 0.0, v_sum = 0.0;  ///< running sums over the last L samples (outputs)
-  int sum_window = 0;
+
+  // Paper mode: Eq. 2-7 (stepPaper).
+  PaperLoop paper;
+  double constant_d_p = 0.0;  ///< mean velocity of the calibration window [m/s] (Table 1)
+
+  double d_v = 0.0, d_p = 0.0;  ///< drift terms of either mode, as published
   double time_since_reset = 0.0;
 };
 
@@ -540,10 +540,8 @@ private:
       axis.tracker = std::make_unique<FrequencyTracker>(window, rate, decimation);
       axis.locked = false;
       axis.frequency = 0.0;
-      axis.v_table = SignalHistory(table);
-      axis.y_table = SignalHistory(table);
+      axis.paper.setCapacity(table);
       axis.raw_history = SignalHistory(table);
-      axis.sum_window = 0;
     }
     hop_samples_ = std::max(1, static_cast<int>(std::lround(config_.fft_hop * rate)));
     since_analysis_ = 0;
@@ -569,13 +567,9 @@ private:
       axis.bias_rate = 0.0;
       axis.residual_variance = 0.0;
       axis.broadband = BroadbandWave(&axis == &axes_[2], config_.heave_corner_frequency, config_.min_frequency);
-      axis.paper_v = axis.paper_y = 0.0;
+      axis.paper.reset();
       axis.d_v = axis.d_p = 0.0;
-      axis.v_table.clear();
       axis.raw_history.clear();
-      axis.y_table.clear();
-      axis.y_sum = axis.v_sum = 0.0;
-      axis.sum_window = 0;
       axis.time_since_reset = 0.0;
     }
     since_analysis_ = 0;
@@ -894,32 +888,6 @@ private:
     }
   }
 
-  /// Appends (y, v) to the axis tables and returns their means over the last `window` samples
-  /// (running sums, O(1) per sample while the window stays the same).
-  static void pushAndAverage(AxisEstimator& axis, double y, double v, int window, double* y_mean, double* v_mean)
-  {
-    axis.y_table.push(y);
-    axis.v_table.push(v);
-    window = std::min(window, axis.y_table.size());
-    if (window != axis.sum_window)
-    {
-      axis.sum_window = window;
-      axis.y_sum = axis.v_sum = 0.0;
-      for (int k = 1; k <= window; ++k)
-      {
-        axis.y_sum += axis.y_table.ago(k);
-        axis.v_sum += axis.v_table.ago(k);
-      }
-    }
-    else
-    {
-      axis.y_sum += y - (axis.y_table.size() > window ? axis.y_table.ago(window + 1) : 0.0);
-      axis.v_sum += v - (axis.v_table.size() > window ? axis.v_table.ago(window + 1) : 0.0);
-    }
-    *y_mean = axis.y_sum / std::max(1, window);
-    *v_mean = axis.v_sum / std::max(1, window);
-  }
-
   /// Default mode with heave_filter: the broadband wave estimate of axis i (BroadbandWave),
   /// blended into the harmonic model's wave output by its share. A horizontal axis may take a
   /// share only when the ship has not turned for kAfterTurn (a turn's centripetal acceleration
@@ -1114,53 +1082,25 @@ private:
   /// "peaks" are the extremes of the corrected signal's table over the last period.
   void stepPaper(AxisEstimator& axis, double compensated, double dt, int i, CompensatorOutput* out)
   {
+    PaperStep in;
+    in.acceleration = compensated;
+    in.dt = dt;
     const int period = axis.locked && rate_ > 0.0 ? static_cast<int>(std::lround(rate_ / axis.frequency)) : 0;
     out->axes[i].period_too_short = config_.enable_periodic && axis.locked && period < kMinPaperPeriod;
-    const bool periodic = config_.enable_periodic && period >= kMinPaperPeriod && axis.v_table.size() >= period &&
-                          period <= axis.v_table.capacity();
-    const AxisGains& g = config_.gains[i];
-
-    double v = axis.paper_v + compensated * dt;  // Eq. 2
-    if (periodic)
-    {
-      axis.d_v = g.beta_v * axis.v_table.midRange(period) + g.alpha_v * (v - axis.v_table.ago(period));  // Eq. 6
-      v -= axis.d_v / period;  // Eq. 3
-    }
-    else
-    {
-      axis.d_v = 0.0;
-    }
-    const double constant_drift = config_.enable_constant && calibrated_ ? axis.constant_d_p : 0.0;
-    double y = axis.paper_y + (v - constant_drift) * dt;  // Eq. 4
-    if (periodic)
-    {
-      axis.d_p = g.beta_p * axis.y_table.midRange(period) + g.alpha_p * (y - axis.y_table.ago(period));  // Eq. 7
-      y -= axis.d_p / period;  // Eq. 5
-    }
-    else
-    {
-      axis.d_p = 0.0;
-    }
-    axis.paper_v = v;
-    axis.paper_y = y;
-    double y_slow = 0.0, v_slow = 0.0;
-    pushAndAverage(axis, y, v, periodic ? period : 1, &y_slow, &v_slow);
-    out->position_filtered[i] = y_slow;
-    out->velocity_filtered[i] = v_slow;
-    out->position_wave[i] = y - y_slow;
-    out->velocity_wave[i] = v - v_slow;
-    out->axes[i].periodic_bias = periodic ? axis.d_v / (period * dt > 0.0 ? period * dt : 1.0) : 0.0;
-
-    // Integrated white noise since the last reset: no bound is claimed for the paper's loop.
-    const double sigma2 = axis.residual_variance;
-    const double beta = dt > 0.0 ? 1.0 - std::exp(-dt / config_.harmonic_memory) : 0.0;
-    axis.residual_variance = (1.0 - beta) * sigma2 + beta * compensated * compensated;
-    const double density = 2.0 * axis.residual_variance * dt;
-    const double t = axis.time_since_reset;
-    out->position_variance[i] = density * t * t * t / 3.0;
-    out->velocity_variance[i] = density * t;
-    out->wave_position_variance[i] = out->position_variance[i];
-    out->wave_velocity_variance[i] = out->velocity_variance[i];
+    in.period = config_.enable_periodic ? period : 0;
+    in.constant_drift = config_.enable_constant && calibrated_ ? axis.constant_d_p : 0.0;
+    in.memory = config_.harmonic_memory;
+    in.time_since_reset = axis.time_since_reset;
+    const PaperOutput paper = axis.paper.step(in, config_.gains[i]);
+    axis.d_v = paper.d_v;
+    axis.d_p = paper.d_p;
+    out->position_filtered[i] = paper.position_filtered;
+    out->velocity_filtered[i] = paper.velocity_filtered;
+    out->position_wave[i] = paper.position_wave;
+    out->velocity_wave[i] = paper.velocity_wave;
+    out->axes[i].periodic_bias = paper.periodic_bias;
+    out->position_variance[i] = out->wave_position_variance[i] = paper.position_variance;
+    out->velocity_variance[i] = out->wave_velocity_variance[i] = paper.velocity_variance;
   }
 
   CompensatorConfig config_;
