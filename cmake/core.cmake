@@ -11,7 +11,8 @@ add_library(${PROJECT_NAME}_core
   src/core/wiener_heave.cpp
   src/core/broadband_wave.cpp
   src/core/harmonic_model.cpp
-  src/core/paper_loop.cpp)
+  src/core/paper_loop.cpp
+  src/core/leveller.cpp)
 target_include_directories(${PROJECT_NAME}_core PUBLIC include)
 target_link_libraries(${PROJECT_NAME}_core PUBLIC Eigen3::Eigen PkgConfig::FFTW3 yaml-cpp)
 
@@ -29,6 +30,7 @@ if(CATKIN_ENABLE_TESTING)
     test/core/test_broadband_wave.cpp
     test/core/test_harmonic_model.cpp
     test/core/test_paper_loop.cpp
+    test/core/test_leveller.cpp
     test/core/test_real_world_streams.cpp)
   target_link_libraries(test_core ${PROJECT_NAME}_core)
   # test_real_world_streams reads ../shared/data beside the repository when it is there.

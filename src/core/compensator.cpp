@@ -1,6 +1,7 @@
 #include "periodic_bias_compensation/core/compensator.h"
 #include "periodic_bias_compensation/core/broadband_wave.h"
 #include "periodic_bias_compensation/core/harmonic_model.h"
+#include "periodic_bias_compensation/core/leveller.h"
 #include "periodic_bias_compensation/core/paper_loop.h"
 
 #include <algorithm>
@@ -46,12 +47,6 @@ constexpr double kDecimatedRateFactor = 5.0;
 bool isFinite(const Vector3& v)
 {
   return v.allFinite();
-}
-
-Quaternion levelFromSpecificForce(const Vector3& mean_specific_force)
-{
-  // At rest the specific force points up: rotate it onto +z (yaw is unobservable: kept 0).
-  return Quaternion::FromTwoVectors(mean_specific_force.normalized(), Vector3::UnitZ());
 }
 
 }  // namespace
@@ -353,13 +348,7 @@ public:
   void resetEstimator()
   {
     planned_rate_ = 0.0;
-    has_level_ = false;
-    level_calibrated_ = false;
-    level_source_ = LevelSource::kNone;
-    attitude_samples_ = 0;
-    orientation_lost_ = false;
-    gyro_.reset();
-    gyro_levelled_ = false;
+    leveller_.reset();
     calibration_buffer_.clear();
     if (!bias_from_file_)
     {
@@ -380,12 +369,8 @@ public:
     // Paper mode keeps one level frame (the calibration window's gravity direction), as the
     // paper's constant-bias calibration assumes: its loop integrates any tilt change of the gyro's
     // attitude into the bias.
-    if (config_.gyro_attitude && config_.mode == Mode::kDefault)
-      attitudeFromGyro(&s, dt);
-    else
-      gyro_levelled_ = false;
-
-    updateLevel(s, dt);
+    leveller_.orient(&s, dt, config_.gyro_attitude && config_.mode == Mode::kDefault,
+                     { config_.tilt_time_constant, config_.estimate_gyro_bias });
     CompensatorOutput output;
     if (needsCalibration())
     {
@@ -456,15 +441,15 @@ public:
   }
   Quaternion levelOrientation() const
   {
-    return level_;
+    return leveller_.level();
   }
   LevelSource levelSource() const
   {
-    return gyro_levelled_ ? LevelSource::kGyroAttitude : level_source_;
+    return leveller_.source();
   }
   Vector3 gyroBias() const
   {
-    return gyro_.gyroBias();
+    return leveller_.gyro().gyroBias();
   }
   const CompensatorCounters& counters() const
   {
@@ -491,7 +476,7 @@ private:
   bool needsCalibration() const
   {
     const bool need_bias = config_.enable_constant && !calibrated_;
-    const bool need_level = !level_calibrated_ && !last_had_orientation_;
+    const bool need_level = leveller_.needsCalibration();
     return need_bias || need_level;
   }
 
@@ -577,64 +562,9 @@ private:
 
   /// gyro_attitude: a sample without orientation gets the gyro's, which starts from the IMU's
   /// last orientation if there was one, from the specific force otherwise.
-  void attitudeFromGyro(ImuSample* s, double dt)
-  {
-    gyro_levelled_ = false;
-    if (s->has_orientation)
-    {
-      gyro_.reset(s->orientation);
-      return;
-    }
-    gyro_.setConfig({ config_.tilt_time_constant, config_.estimate_gyro_bias });
-    gyro_.update(s->angular_rate, s->specific_force, dt);
-    if (gyro_.initialised())
-    {
-      s->orientation = gyro_.attitude();
-      s->has_orientation = true;
-      gyro_levelled_ = true;
-    }
-  }
-
-  /// Level frame for samples without orientation. While the IMU gives orientation its mean over
-  /// kAttitudeMemory is kept; when it stops, that mean is used (the hull's roll and pitch at one
-  /// instant would tilt the frame by the wave motion). Without any orientation seen, the
-  /// gravity direction: one sample until the calibration window has been averaged.
-  void updateLevel(const ImuSample& s, double dt)
-  {
-    if (s.has_orientation)
-    {
-      // Running mean of unit quaternions (close together: the normalised component mean),
-      // a plain mean for the first samples, then exponential forgetting.
-      Quaternion q = s.orientation;
-      if (attitude_samples_ > 0 && q.coeffs().dot(attitude_.coeffs()) < 0.0)
-        q.coeffs() *= -1.0;
-      ++attitude_samples_;
-      const double weight = std::max(1.0 - std::exp(-dt / kAttitudeMemory), 1.0 / attitude_samples_);
-      attitude_.coeffs() = attitude_samples_ == 1 ? q.coeffs() : (attitude_.coeffs() + weight * (q.coeffs() - attitude_.coeffs())).eval();
-      attitude_.normalize();
-      orientation_lost_ = false;
-      return;
-    }
-    if (attitude_samples_ > 0 && !orientation_lost_)
-    {
-      level_ = attitude_;
-      has_level_ = true;
-      level_source_ = LevelSource::kAttitudeBeforeLoss;
-    }
-    else if (!has_level_)
-    {
-      level_ = levelFromSpecificForce(s.specific_force);
-      has_level_ = true;
-      level_source_ = LevelSource::kGravity;
-    }
-    orientation_lost_ = true;
-  }
-
   Vector3 levelAcceleration(const ImuSample& s)
   {
-    last_had_orientation_ = s.has_orientation;
-    const Quaternion& q = s.has_orientation ? s.orientation : level_;
-    return q * s.specific_force - Vector3(0.0, 0.0, config_.gravity);
+    return leveller_.levelAcceleration(s, config_.gravity);
   }
 
   /// Ends the calibration window: level and constant bias from the buffered samples, then the
@@ -649,12 +579,7 @@ private:
       any_without_orientation |= !b.sample.has_orientation;
     }
     mean_force /= static_cast<double>(calibration_buffer_.size());
-    if (any_without_orientation && level_source_ != LevelSource::kAttitudeBeforeLoss)
-    {
-      level_ = levelFromSpecificForce(mean_force);
-      level_source_ = LevelSource::kGravity;
-    }
-    level_calibrated_ = true;
+    leveller_.calibrate(mean_force, any_without_orientation);
 
     std::array<FrequencyEstimate, 3> window_frequency;
     if (!bias_from_file_)
@@ -743,7 +668,7 @@ private:
     CompensatorOutput out;
     out.t = s.t;
     now_ = s.t;
-    out.orientation = s.has_orientation ? s.orientation : level_;
+    out.orientation = s.has_orientation ? s.orientation : leveller_.level();
     const Vector3 a = levelAcceleration(s);
     {
       const double yaw_rate = (out.orientation * s.angular_rate).z();
@@ -1120,16 +1045,7 @@ private:
   double since_turn_ = 0.0;    ///< time since it last exceeded kTurnRate, or since the last
                                ///< sample without an attitude [s]
 
-  bool has_level_ = false;
-  bool level_calibrated_ = false;
-  LevelSource level_source_ = LevelSource::kNone;
-  Quaternion attitude_ = Quaternion::Identity();  ///< mean IMU orientation (updateLevel)
-  GyroAttitude gyro_;  ///< attitude of samples without orientation (gyro_attitude)
-  bool gyro_levelled_ = false;  ///< the last sample's orientation came from gyro_
-  long attitude_samples_ = 0;
-  bool orientation_lost_ = false;  ///< the last sample had no orientation
-  bool last_had_orientation_ = false;
-  Quaternion level_ = Quaternion::Identity();
+  Leveller leveller_;
 
   bool calibrated_ = false;
   bool bias_from_file_ = false;
