@@ -342,6 +342,22 @@ TEST(RealWorldStreams, RealIMUsAtRestInventNoMotion)
 
 namespace
 {
+/// JONSWAP spectral density (gamma 3.3) at f [Hz] for the peak fp [Hz], unscaled.
+double jonswap(double f, double fp)
+{
+  const double sigma = f <= fp ? 0.07 : 0.09;
+  return std::pow(f, -5.0) * std::exp(-1.25 * std::pow(fp / f, 4.0)) *
+         std::pow(3.3, std::exp(-std::pow(f - fp, 2.0) / (2.0 * sigma * sigma * fp * fp)));
+}
+
+/// Densities of components df apart (their sum times df: m0) into amplitudes of a sea of
+/// significant height hs [m].
+void scaleToHs(std::vector<double>* amplitude, double hs, double m0, double df)
+{
+  for (double& a : *amplitude)
+    a = std::sqrt(2.0 * a * (hs * hs / 16.0) / m0 * df);
+}
+
 /// Heave RMS error after 20 s in % of Hs on a moored JONSWAP sea (gamma 3.3, 300 components with
 /// random phases, 0.04-0.6 Hz; Hs 1.2-2.4 m, Tp 7-10 s drawn from the seed), level IMU reporting
 /// orientation at 50 Hz, noise 0.004 m/s^2/sqrt(Hz), a constant bias and a bias random walk.
@@ -358,14 +374,11 @@ double mooredHeaveError(unsigned seed, double random_walk, double duration)
   for (int k = 0; k < components; ++k)
   {
     f[k] = 0.04 + (k + u(rng)) * df;
-    const double sigma = f[k] <= fp ? 0.07 : 0.09;
-    amplitude[k] = std::pow(f[k], -5.0) * std::exp(-1.25 * std::pow(fp / f[k], 4.0)) *
-                   std::pow(3.3, std::exp(-std::pow(f[k] - fp, 2.0) / (2.0 * sigma * sigma * fp * fp)));
+    amplitude[k] = jonswap(f[k], fp);
     m0 += amplitude[k] * df;
     phase[k] = 2.0 * M_PI * u(rng);
   }
-  for (double& a : amplitude)
-    a = std::sqrt(2.0 * a * (hs * hs / 16.0) / m0 * df);
+  scaleToHs(&amplitude, hs, m0, df);
   const double rate = 50.0, sigma = 0.004 * std::sqrt(rate / 2.0);
   Compensator compensator;
   Vector3 walk = Vector3::Zero();
@@ -442,9 +455,7 @@ std::array<double, 2> mooredSurgeSwayError(unsigned seed, double random_walk, co
   for (int k = 0; k < components; ++k)
   {
     f[k] = 0.04 + (k + u(rng)) * df;
-    const double sigma = f[k] <= fp ? 0.07 : 0.09;
-    amplitude[k] = std::pow(f[k], -5.0) * std::exp(-1.25 * std::pow(fp / f[k], 4.0)) *
-                   std::pow(3.3, std::exp(-std::pow(f[k] - fp, 2.0) / (2.0 * sigma * sigma * fp * fp)));
+    amplitude[k] = jonswap(f[k], fp);
     m0 += amplitude[k] * df;
     const double direction = (2.0 * u(rng) - 1.0) * M_PI / 3.0, response = 0.3 + 0.4 * u(rng);
     gain_x[k] = response * std::cos(direction);
@@ -452,8 +463,7 @@ std::array<double, 2> mooredSurgeSwayError(unsigned seed, double random_walk, co
     phase_x[k] = 2.0 * M_PI * u(rng);
     phase_y[k] = 2.0 * M_PI * u(rng);
   }
-  for (double& a : amplitude)
-    a = std::sqrt(2.0 * a * (hs * hs / 16.0) / m0 * df);
+  scaleToHs(&amplitude, hs, m0, df);
   const double rate = 50.0, noise = 0.004 * std::sqrt(rate / 2.0);
   Compensator compensator(config);
   Vector3 walk = Vector3::Zero();
