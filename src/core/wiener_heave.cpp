@@ -72,7 +72,8 @@ void WienerHeave::reset()
   first_sum_ = second_sum_ = 0.0;
   samples_ = 0;
   history_.clear();
-  head_ = 0;
+  ring_length_ = 0;
+  newest_ = 0;
   decimated_.clear();
   since_design_ = 0.0;
   current_.reset();
@@ -96,8 +97,8 @@ WienerHeaveOutput WienerHeave::update(double a, double dt, double noise_density_
     decimation_ = std::max(1, static_cast<int>(std::lround(kDesignPeriod / dt)));
     first_.assign(decimation_, 0.0);
     second_.assign(decimation_, 0.0);
-    const int span = static_cast<int>(std::ceil(kMaxSpan / (decimation_ * dt_)));
-    history_.assign(static_cast<size_t>(span) * decimation_ + 1, 0.0);
+    ring_length_ = static_cast<int>(std::ceil(kMaxSpan / (decimation_ * dt_)));
+    history_.assign(static_cast<size_t>(ring_length_) * decimation_, 0.0);
   }
   // Two moving averages (running sums over circular buffers of decimation_ values).
   const int slot = static_cast<int>(samples_ % decimation_);
@@ -107,9 +108,10 @@ WienerHeaveOutput WienerHeave::update(double a, double dt, double noise_density_
   second_sum_ += once - second_[slot];
   second_[slot] = once;
   const double low = second_sum_ / decimation_;
+  // Sample m goes to ring m mod D, place (m / D) mod ring_length_.
+  newest_ = static_cast<int>(slot * ring_length_ + (samples_ / decimation_) % ring_length_);
+  history_[newest_] = low;
   ++samples_;
-  head_ = (head_ + 1) % static_cast<int>(history_.size());
-  history_[head_] = low;
   if (samples_ < 2 * decimation_)
     return out;  // the averages are not full yet
   if (samples_ % decimation_ == 0)
@@ -148,17 +150,17 @@ WienerHeaveOutput WienerHeave::update(double a, double dt, double noise_density_
 
 void WienerHeave::apply(const Design& d, double* x, double* v) const
 {
-  const int size = static_cast<int>(history_.size());
+  // The values D samples apart ending at the newest lie next to each other in its ring,
+  // newest last: walked backwards, wrapping once.
+  const double* ring = history_.data() + (newest_ / ring_length_) * ring_length_;
+  int place = newest_ % ring_length_;
   double px = 0.0, pv = 0.0;
-  int index = head_;
   for (size_t k = 0; k < d.position.size(); ++k)
   {
-    const double value = history_[index] - d.mean;
+    const double value = ring[place] - d.mean;
     px += d.position[k] * value;
     pv += d.velocity[k] * value;
-    index -= decimation_;
-    if (index < 0)
-      index += size;
+    place = place > 0 ? place - 1 : ring_length_ - 1;
   }
   *x = px;
   *v = pv;

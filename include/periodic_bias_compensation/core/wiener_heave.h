@@ -103,9 +103,11 @@ private:
   std::vector<double> first_, second_;
   double first_sum_ = 0.0, second_sum_ = 0.0;
   long samples_ = 0;
-  // Low-passed values at the full rate, the newest at history_[head_].
+  // Low-passed values at the full rate in decimation_ rings of ring_length_ (one per sample
+  // phase modulo D, so that the FIR reads consecutive values); the newest at history_[newest_].
   std::vector<double> history_;
-  int head_ = 0;
+  int ring_length_ = 0;
+  int newest_ = 0;
   // Design-rate values, oldest first, at most kDesignWindow.
   std::vector<double> decimated_;
   double since_design_ = 0.0;
