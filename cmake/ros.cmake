@@ -1,13 +1,15 @@
 # ROS wrapper, nodelet, node, offline bag tools and rostests.
 include_directories(include ${catkin_INCLUDE_DIRS})
 
-# Wrapper library: message conversions, parameters, the CompensatorRos class.
+# Wrapper library: message conversions, parameters, the CompensatorRos class, the bag writer.
 add_library(${PROJECT_NAME}_ros
   src/ros/conversions.cpp
   src/ros/parameters.cpp
   src/ros/raw_integrator.cpp
-  src/ros/compensator_ros.cpp)
-target_link_libraries(${PROJECT_NAME}_ros ${PROJECT_NAME}_core ${catkin_LIBRARIES} yaml-cpp)
+  src/ros/compensator_ros.cpp
+  src/ros/bag_writer.cpp)
+# roslz4 and bz2: BagWriter compresses chunks itself (not exported by rosbag_storage).
+target_link_libraries(${PROJECT_NAME}_ros ${PROJECT_NAME}_core ${catkin_LIBRARIES} yaml-cpp roslz4 bz2)
 add_dependencies(${PROJECT_NAME}_ros ${PROJECT_NAME}_gencfg ${PROJECT_NAME}_generate_messages_cpp)
 
 add_library(${PROJECT_NAME}_nodelet src/ros/compensator_nodelet.cpp)

@@ -1,9 +1,10 @@
 // compensate_bag: runs the compensator over a bag at full speed, without a ROS master, and writes
 // the same outputs as the node (odometry/filtered, odometry/wave, bias_state) to a new bag,
-// copying ground_truth/* through.
+// copying ground_truth/* through (as their bytes, not deserialised).
 //
 //   compensate_bag --in IN.bag --out OUT.bag [--mode paper|default] [--params FILE.yaml]
-//                  [--imu-topic imu/data]
+//                  [--imu-topic imu/data] [--outputs filtered,wave,bias,ground_truth]
+//                  [--compression none|lz4|bz2]
 //
 // The output is written to a temporary file next to OUT and renamed when complete, so a failure
 // never leaves a partial OUT behind; IN is never overwritten. Exit status: 0 success, 1 error,
@@ -34,6 +35,7 @@
 #include "periodic_bias_compensation/core/calibration_file.h"
 #include "periodic_bias_compensation/core/compensator.h"
 #include "periodic_bias_compensation/core/gain_tuning.h"
+#include "periodic_bias_compensation/ros/bag_writer.h"
 #include "periodic_bias_compensation/ros/conversions.h"
 #include "periodic_bias_compensation/ros/parameters.h"
 #include "periodic_bias_compensation/tools/command_line.h"
@@ -46,12 +48,25 @@ namespace
 const char* const kUsage =
     "usage: compensate_bag --in IN.bag --out OUT.bag [--mode paper|default] [--params FILE.yaml]\n"
     "                      [--imu-topic imu/data] [--tune-gains GAINS.yaml]\n"
+    "                      [--outputs filtered,wave,bias,ground_truth] [--compression none|lz4|bz2]\n"
     "Runs the bias compensator over IN.bag and writes odometry/filtered, odometry/wave and\n"
     "bias_state (plus ground_truth/* copied through) to OUT.bag. --params takes a YAML file with\n"
     "the keys of config/compensator.yaml; --mode overrides its 'mode'.\n"
+    "--outputs: which of them to write, comma-separated (default: all four).\n"
+    "--compression: of OUT.bag's chunks (default: none, the fastest; lz4 about a third of the\n"
+    "size, bz2 the smallest and slowest).\n"
     "--tune-gains also tunes paper mode's alpha/beta on IN.bag, which must be recorded while the\n"
     "vessel holds its station (moored, at anchor, on a bench: its slow motion is taken as zero),\n"
     "and writes them to GAINS.yaml as parameters (give it to --params or the node's rosparams).\n";
+
+/// What OUT.bag holds (--outputs).
+struct Outputs
+{
+  bool filtered = true;      ///< /odometry/filtered
+  bool wave = true;          ///< /odometry/wave
+  bool bias = true;          ///< /bias_state
+  bool ground_truth = true;  ///< ground_truth/* copied from IN
+};
 
 struct Options
 {
@@ -61,7 +76,50 @@ struct Options
   std::string params;
   std::string imu_topic = "imu/data";
   std::string tune_gains;
+  Outputs outputs;
+  BagWriter::Compression compression = BagWriter::Compression::kNone;
 };
+
+/// "filtered,wave": the outputs named; an unknown or missing name is a UsageError.
+Outputs parseOutputs(const std::string& list)
+{
+  Outputs outputs{ false, false, false, false };
+  const std::map<std::string, bool*> names{ { "filtered", &outputs.filtered },
+                                            { "wave", &outputs.wave },
+                                            { "bias", &outputs.bias },
+                                            { "ground_truth", &outputs.ground_truth } };
+  std::size_t begin = 0;
+  while (true)
+  {
+    const std::size_t end = std::min(list.find(',', begin), list.size());
+    const std::string name = list.substr(begin, end - begin);
+    const auto known = names.find(name);
+    if (known == names.end())
+    {
+      throw UsageError("--outputs: unknown output '" + name + "' in '" + list +
+                       "' (known: filtered, wave, bias, ground_truth)");
+    }
+    *known->second = true;
+    if (end == list.size())
+    {
+      return outputs;
+    }
+    begin = end + 1;
+  }
+}
+
+BagWriter::Compression parseCompression(const std::string& name)
+{
+  for (const BagWriter::Compression c :
+       { BagWriter::Compression::kNone, BagWriter::Compression::kLz4, BagWriter::Compression::kBz2 })
+  {
+    if (name == BagWriter::toString(c))
+    {
+      return c;
+    }
+  }
+  throw UsageError("--compression must be 'none', 'lz4' or 'bz2', got '" + name + "'");
+}
 
 /// The options, or nothing after --help. A wrong command line throws UsageError (exit status 2).
 std::optional<Options> parseArguments(int argc, char** argv)
@@ -73,7 +131,9 @@ std::optional<Options> parseArguments(int argc, char** argv)
       .text("--mode", &options.mode)
       .text("--params", &options.params)
       .text("--imu-topic", &options.imu_topic)
-      .text("--tune-gains", &options.tune_gains);
+      .text("--tune-gains", &options.tune_gains)
+      .option("--outputs", [&](const std::string& v) { options.outputs = parseOutputs(v); })
+      .option("--compression", [&](const std::string& v) { options.compression = parseCompression(v); });
   if (!cli.parse(argc, argv))
     return std::nullopt;
   if (options.in.empty() || options.out.empty())
@@ -576,16 +636,43 @@ public:
                                " (topics: " + (list.empty() ? "none" : list) + ")");
     }
 
-    rosbag::Bag out;
-    out.open(temp_path, rosbag::bagmode::Write);
-    out.setCompression(rosbag::compression::LZ4);
+    // What each connection of IN is to this tool: only those used are read. A message finds its
+    // connection by its connection header (the same object for all messages of a connection).
+    std::vector<InputConnection> connections;
+    for (const rosbag::ConnectionInfo* c : all.getConnections())
+    {
+      const std::string topic = absoluteTopic(c->topic);
+      const Role role = topic == imu_topic                                    ? Role::kImu :
+                        options_.outputs.ground_truth && isGroundTruth(topic) ? Role::kCopy :
+                                                                                Role::kSkip;
+      connections.push_back(InputConnection{ c->header.get(), c->id, role, std::nullopt });
+    }
+    rosbag::View view(in, [&connections](const rosbag::ConnectionInfo* c) {
+      return std::any_of(connections.begin(), connections.end(),
+                         [c](const InputConnection& i) { return i.id == c->id && i.role != Role::kSkip; });
+    });
+
+    BagWriter out(temp_path, options_.compression);
+    std::size_t last = 0;  // messages of one connection tend to follow each other
     const ros::Time begin = all.getBeginTime();
     const double span = std::max((all.getEndTime() - begin).toSec(), 1e-9);
     auto last_report = std::chrono::steady_clock::now();
-    for (const rosbag::MessageInstance& m : all)
+    std::uint64_t messages = 0;
+    for (const rosbag::MessageInstance& m : view)
     {
-      const std::string topic = absoluteTopic(m.getTopic());
-      if (topic == imu_topic)
+      const ros::M_string* header = m.getConnectionHeader().get();
+      if (connections[last].header != header)
+      {
+        last = std::find_if(connections.begin(), connections.end(),
+                            [header](const InputConnection& c) { return c.header == header; }) -
+               connections.begin();
+        if (last == connections.size())
+        {
+          throw std::runtime_error("a message of topic '" + m.getTopic() + "' has no connection record");
+        }
+      }
+      InputConnection& connection = connections[last];
+      if (connection.role == Role::kImu)
       {
         const sensor_msgs::Imu::ConstPtr imu = m.instantiate<sensor_msgs::Imu>();
         if (!imu)
@@ -594,20 +681,28 @@ public:
         }
         process(*imu, m.getTime(), &out);
       }
-      else if (isGroundTruth(topic))
+      else
       {
-        out.write(m.getTopic(), m.getTime(), m, m.getConnectionHeader());
+        if (!connection.copy)
+        {
+          connection.copy = out.addConnection(m.getTopic(), *header);
+        }
+        out.write(*connection.copy, m.getTime(), m);
       }
-      const auto now = std::chrono::steady_clock::now();
-      if (now - last_report > std::chrono::seconds(2))
+      if (++messages % 256 == 0)
       {
-        last_report = now;
-        std::fprintf(stderr, "compensate_bag: %3.0f%% (%.1f of %.1f s)\n",
-                     100.0 * (m.getTime() - begin).toSec() / span, (m.getTime() - begin).toSec(), span);
+        const auto now = std::chrono::steady_clock::now();
+        if (now - last_report > std::chrono::seconds(2))
+        {
+          last_report = now;
+          reportProgress((m.getTime() - begin).toSec(), span);
+        }
       }
     }
     out.close();
     in.close();
+    // The last line stays: the whole bag was read.
+    reportProgress(span, span);
   }
 
   /// --tune-gains: paper mode's gains tuned on the samples of this bag (tunePaperGains), written
@@ -670,7 +765,39 @@ public:
   }
 
 private:
-  void process(const sensor_msgs::Imu& imu, const ros::Time& bag_time, rosbag::Bag* out)
+  /// What compensate_bag does with the messages of a connection of IN.
+  enum class Role
+  {
+    kSkip,
+    kImu,   ///< compensated
+    kCopy,  ///< ground_truth/*, copied through
+  };
+  struct InputConnection
+  {
+    const ros::M_string* header;       ///< rosbag::ConnectionInfo::header
+    std::uint32_t id;
+    Role role;
+    std::optional<std::uint32_t> copy;    ///< OUT's connection, for kCopy
+  };
+
+  static void reportProgress(double done, double span)
+  {
+    std::fprintf(stderr, "compensate_bag: %3.0f%% (%.1f of %.1f s)\n", 100.0 * done / span, done, span);
+  }
+
+  /// OUT's connection for one output, added when its first message is written.
+  template <class M>
+  void writeOutput(BagWriter* out, std::optional<std::uint32_t>* connection, const std::string& topic,
+                   const ros::Time& time, const M& message)
+  {
+    if (!*connection)
+    {
+      *connection = out->addConnection<M>(topic);
+    }
+    out->write(**connection, time, message);
+  }
+
+  void process(const sensor_msgs::Imu& imu, const ros::Time& bag_time, BagWriter* out)
   {
     ++received_;
     if (!frame_filter_.accept(imu.header.frame_id))
@@ -714,19 +841,28 @@ private:
       return;
     }
     frame_filter_.learn(imu.header.frame_id);
+    // Only the outputs written are built (and must be finite).
+    const Outputs& outputs = options_.outputs;
     const OdometryFrames frames{ params_.ros.odom_frame, params_.ros.base_frame };
-    const nav_msgs::Odometry filtered = toOdometry(result, OdometryKind::kFiltered, imu, mounting_, frames,
-                                                   imu.header.stamp);
-    const nav_msgs::Odometry wave = toOdometry(result, OdometryKind::kWave, imu, mounting_, frames, imu.header.stamp);
-    const BiasState bias = toBiasState(result, compensator_.config().mode, params_.ros.odom_frame, imu.header.stamp);
-    if (!allFinite(filtered) || !allFinite(wave) || !allFinite(bias))
+    std::optional<nav_msgs::Odometry> filtered, wave;
+    std::optional<BiasState> bias;
+    if (outputs.filtered)
+      filtered = toOdometry(result, OdometryKind::kFiltered, imu, mounting_, frames, imu.header.stamp);
+    if (outputs.wave)
+      wave = toOdometry(result, OdometryKind::kWave, imu, mounting_, frames, imu.header.stamp);
+    if (outputs.bias)
+      bias = toBiasState(result, compensator_.config().mode, params_.ros.odom_frame, imu.header.stamp);
+    if ((filtered && !allFinite(*filtered)) || (wave && !allFinite(*wave)) || (bias && !allFinite(*bias)))
     {
       ++nonfinite_outputs_;
       return;
     }
-    out->write("/odometry/filtered", bag_time, filtered);
-    out->write("/odometry/wave", bag_time, wave);
-    out->write("/bias_state", bag_time, bias);
+    if (filtered)
+      writeOutput(out, &filtered_connection_, "/odometry/filtered", bag_time, *filtered);
+    if (wave)
+      writeOutput(out, &wave_connection_, "/odometry/wave", bag_time, *wave);
+    if (bias)
+      writeOutput(out, &bias_connection_, "/bias_state", bag_time, *bias);
   }
 
   const Options& options_;
@@ -741,6 +877,7 @@ private:
   std::uint64_t out_of_range_ = 0;
   std::uint64_t nonfinite_outputs_ = 0;
   ForceUnits units_ = ForceUnits::kUnknown;  ///< the last units reported
+  std::optional<std::uint32_t> filtered_connection_, wave_connection_, bias_connection_;  ///< in OUT
 };
 
 /// Checks the input exists and that OUT cannot clobber it.

@@ -1,0 +1,122 @@
+// BagWriter: writes a rosbag (format 2.0, indexed, readable by rosbag and `rosbag info`) in one
+// pass, appending to an in-memory chunk and writing each chunk with one call. rosbag::Bag::write
+// seeks to the end of the file twice for every message (it may have been reading); a writer that
+// never reads needs none of that, and a message already serialised in another bag is copied as
+// its bytes (rosbag::MessageInstance), not deserialised.
+//
+//   BagWriter out(path, BagWriter::Compression::kNone);
+//   const std::uint32_t odom = out.addConnection<nav_msgs::Odometry>("/odometry/filtered");
+//   out.write(odom, stamp, message);
+//   out.close();  // writes the index; without it the file is not a complete bag
+//
+// Errors (cannot open, write or compress) throw std::runtime_error naming the file.
+#pragma once
+
+#include <cstdint>
+#include <cstdio>
+#include <map>
+#include <string>
+#include <vector>
+
+#include <ros/message_traits.h>
+#include <ros/serialization.h>
+#include <ros/time.h>
+#include <rosbag/message_instance.h>
+
+namespace periodic_bias_compensation
+{
+class BagWriter
+{
+public:
+  enum class Compression
+  {
+    kNone,
+    kLz4,
+    kBz2,
+  };
+
+  /// rosbag's own chunk size (rosbag::Bag's default chunk threshold).
+  static constexpr std::uint32_t kDefaultChunkThreshold = 768 * 1024;
+
+  /// Creates (truncates) `path` and writes the bag's file header.
+  BagWriter(const std::string& path, Compression compression,
+            std::uint32_t chunk_threshold = kDefaultChunkThreshold);
+  /// Closes the file without writing the index if close() was not called (the file is then
+  /// incomplete: the caller removes it).
+  ~BagWriter();
+  BagWriter(const BagWriter&) = delete;
+  BagWriter& operator=(const BagWriter&) = delete;
+
+  /// A connection with its connection header (at least "type", "md5sum" and
+  /// "message_definition"; "topic" is set to `topic`). Returns its id for write().
+  std::uint32_t addConnection(const std::string& topic, std::map<std::string, std::string> header);
+
+  /// A connection for messages of type M.
+  template <class M>
+  std::uint32_t addConnection(const std::string& topic)
+  {
+    return addConnection(topic, { { "type", ros::message_traits::datatype<M>() },
+                                  { "md5sum", ros::message_traits::md5sum<M>() },
+                                  { "message_definition", ros::message_traits::definition<M>() } });
+  }
+
+  /// Appends a message of a type with ROS serialisation.
+  template <class M>
+  void write(std::uint32_t connection, const ros::Time& time, const M& message)
+  {
+    const std::uint32_t length = ros::serialization::serializationLength(message);
+    ros::serialization::OStream stream(beginMessage(connection, time, length), length);
+    ros::serialization::serialize(stream, message);
+    endMessage();
+  }
+
+  /// Appends a message read from another bag as its serialised bytes.
+  void write(std::uint32_t connection, const ros::Time& time, const rosbag::MessageInstance& message);
+
+  /// Writes the last chunk, the index (connection and chunk info records) and the final file
+  /// header, and closes the file.
+  void close();
+
+  static const char* toString(Compression compression);
+
+private:
+  struct IndexEntry
+  {
+    ros::Time time;
+    std::uint32_t offset;  ///< of the message record in the uncompressed chunk
+  };
+  struct ChunkInfo
+  {
+    std::uint64_t position;
+    ros::Time start, end;
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> counts;  ///< connection, messages
+  };
+  struct Connection
+  {
+    std::string topic;
+    std::map<std::string, std::string> header;
+    bool written = false;  ///< its record is in a chunk already
+  };
+
+  /// Starts a message record of `length` data bytes in the chunk; returns where its data goes.
+  std::uint8_t* beginMessage(std::uint32_t connection, const ros::Time& time, std::uint32_t length);
+  void endMessage();
+  void writeChunk();
+  void writeFileHeader(std::uint64_t index_position);
+  void writeBytes(const void* data, std::size_t size);
+
+  std::string path_;
+  std::FILE* file_ = nullptr;
+  Compression compression_;
+  std::uint32_t chunk_threshold_;
+  std::uint64_t position_ = 0;                      ///< file offset of the next byte written
+  std::vector<Connection> connections_;
+  std::vector<std::uint8_t> chunk_;                 ///< records of the open chunk, uncompressed
+  std::vector<char> compressed_;
+  std::vector<std::vector<IndexEntry>> chunk_index_;  ///< per connection, for the open chunk
+  std::uint32_t chunk_messages_ = 0;
+  ros::Time chunk_start_, chunk_end_;
+  std::vector<ChunkInfo> chunks_;
+  std::vector<std::uint8_t> header_;                ///< scratch for record headers
+};
+}  // namespace periodic_bias_compensation

@@ -1,0 +1,357 @@
+#include "periodic_bias_compensation/ros/bag_writer.h"
+
+#include <algorithm>
+#include <cerrno>
+#include <cstring>
+#include <stdexcept>
+
+#include <bzlib.h>
+#include <roslz4/lz4s.h>
+
+namespace periodic_bias_compensation
+{
+namespace
+{
+// Record types and sizes of the rosbag 2.0 format (rosbag/constants.h).
+constexpr std::uint8_t kOpMessage = 0x02, kOpFileHeader = 0x03, kOpIndexData = 0x04, kOpChunk = 0x05,
+                       kOpChunkInfo = 0x06, kOpConnection = 0x07;
+constexpr char kMagic[] = "#ROSBAG V2.0\n";
+constexpr std::uint32_t kFileHeaderLength = 4096;  ///< header + padding of the file header record
+constexpr std::uint32_t kIndexVersion = 1, kChunkInfoVersion = 1;
+constexpr int kLz4BlockSizeId = 6;  ///< as rosbag's LZ4 stream
+constexpr int kBz2BlockSize = 9, kBz2WorkFactor = 30;
+
+void appendU32(std::vector<std::uint8_t>* out, std::uint32_t value)
+{
+  for (int i = 0; i < 4; ++i)
+  {
+    out->push_back(static_cast<std::uint8_t>(value >> (8 * i)));
+  }
+}
+
+void putU32(std::uint8_t* out, std::uint32_t value)
+{
+  for (int i = 0; i < 4; ++i)
+  {
+    out[i] = static_cast<std::uint8_t>(value >> (8 * i));
+  }
+}
+
+void putTime(std::uint8_t* out, const ros::Time& time)
+{
+  putU32(out, time.sec);
+  putU32(out + 4, time.nsec);
+}
+
+/// One "name=value" field of a record header.
+void appendField(std::vector<std::uint8_t>* out, const std::string& name, const void* value, std::size_t size)
+{
+  appendU32(out, static_cast<std::uint32_t>(name.size() + 1 + size));
+  out->insert(out->end(), name.begin(), name.end());
+  out->push_back('=');
+  const auto* bytes = static_cast<const std::uint8_t*>(value);
+  out->insert(out->end(), bytes, bytes + size);
+}
+
+void appendField(std::vector<std::uint8_t>* out, const std::string& name, std::uint32_t value)
+{
+  std::uint8_t bytes[4];
+  putU32(bytes, value);
+  appendField(out, name, bytes, 4);
+}
+
+void appendField(std::vector<std::uint8_t>* out, const std::string& name, std::uint64_t value)
+{
+  std::uint8_t bytes[8];
+  putU32(bytes, static_cast<std::uint32_t>(value));
+  putU32(bytes + 4, static_cast<std::uint32_t>(value >> 32));
+  appendField(out, name, bytes, 8);
+}
+
+void appendField(std::vector<std::uint8_t>* out, const std::string& name, const ros::Time& value)
+{
+  std::uint8_t bytes[8];
+  putTime(bytes, value);
+  appendField(out, name, bytes, 8);
+}
+
+void appendOp(std::vector<std::uint8_t>* out, std::uint8_t op)
+{
+  appendField(out, "op", &op, 1);
+}
+
+/// A header of "name=value" fields in name order, as ros::Header::write writes a connection header.
+void appendHeader(std::vector<std::uint8_t>* out, const std::map<std::string, std::string>& fields)
+{
+  for (const auto& [name, value] : fields)
+  {
+    appendField(out, name, value.data(), value.size());
+  }
+}
+
+/// A connection record (op, conn, topic; its data the connection header).
+void appendConnectionRecord(std::vector<std::uint8_t>* out, std::uint32_t id, const std::string& topic,
+                            const std::map<std::string, std::string>& header)
+{
+  std::vector<std::uint8_t> fields;
+  appendField(&fields, "conn", id);
+  appendOp(&fields, kOpConnection);
+  appendField(&fields, "topic", topic.data(), topic.size());
+  std::vector<std::uint8_t> data;
+  appendHeader(&data, header);
+  appendU32(out, static_cast<std::uint32_t>(fields.size()));
+  out->insert(out->end(), fields.begin(), fields.end());
+  appendU32(out, static_cast<std::uint32_t>(data.size()));
+  out->insert(out->end(), data.begin(), data.end());
+}
+
+/// Size of a message record's header: fields conn (4 bytes), op (1), time (8).
+constexpr std::uint32_t kMessageHeaderLength = (4 + 5 + 4) + (4 + 3 + 1) + (4 + 5 + 8);
+}  // namespace
+
+BagWriter::BagWriter(const std::string& path, Compression compression, std::uint32_t chunk_threshold)
+  : path_(path), compression_(compression), chunk_threshold_(std::max<std::uint32_t>(chunk_threshold, 1))
+{
+  file_ = std::fopen(path.c_str(), "wb");
+  if (file_ == nullptr)
+  {
+    throw std::runtime_error("cannot create " + path + ": " + std::strerror(errno));
+  }
+  chunk_.reserve(chunk_threshold_ + 64 * 1024);
+  writeBytes(kMagic, sizeof kMagic - 1);
+  writeFileHeader(0);
+}
+
+BagWriter::~BagWriter()
+{
+  if (file_ != nullptr)
+  {
+    std::fclose(file_);
+  }
+}
+
+const char* BagWriter::toString(Compression compression)
+{
+  switch (compression)
+  {
+    case Compression::kNone:
+      return "none";
+    case Compression::kLz4:
+      return "lz4";
+    case Compression::kBz2:
+      return "bz2";
+  }
+  return "none";
+}
+
+std::uint32_t BagWriter::addConnection(const std::string& topic, std::map<std::string, std::string> header)
+{
+  header["topic"] = topic;
+  connections_.push_back(Connection{ topic, std::move(header), false });
+  chunk_index_.emplace_back();
+  return static_cast<std::uint32_t>(connections_.size() - 1);
+}
+
+std::uint8_t* BagWriter::beginMessage(std::uint32_t connection, const ros::Time& time, std::uint32_t length)
+{
+  if (connection >= connections_.size())
+  {
+    throw std::logic_error("BagWriter: unknown connection " + std::to_string(connection));
+  }
+  Connection& c = connections_[connection];
+  if (!c.written)
+  {
+    // The first message of a connection follows its record, as rosbag writes it (rosbag
+    // reindex finds connections there).
+    appendConnectionRecord(&chunk_, connection, c.topic, c.header);
+    c.written = true;
+  }
+  chunk_start_ = chunk_messages_ == 0 ? time : std::min(chunk_start_, time);
+  chunk_end_ = chunk_messages_ == 0 ? time : std::max(chunk_end_, time);
+  ++chunk_messages_;
+  const std::size_t offset = chunk_.size();
+  chunk_index_[connection].push_back(IndexEntry{ time, static_cast<std::uint32_t>(offset) });
+
+  chunk_.resize(offset + 4 + kMessageHeaderLength + 4 + length);
+  std::uint8_t* p = chunk_.data() + offset;
+  putU32(p, kMessageHeaderLength);
+  p += 4;
+  putU32(p, 5 + 4);
+  std::memcpy(p + 4, "conn=", 5);
+  putU32(p + 9, connection);
+  p += 13;
+  putU32(p, 3 + 1);
+  std::memcpy(p + 4, "op=", 3);
+  p[7] = kOpMessage;
+  p += 8;
+  putU32(p, 5 + 8);
+  std::memcpy(p + 4, "time=", 5);
+  putTime(p + 9, time);
+  p += 17;
+  putU32(p, length);
+  return p + 4;
+}
+
+void BagWriter::endMessage()
+{
+  if (chunk_.size() >= chunk_threshold_)
+  {
+    writeChunk();
+  }
+}
+
+void BagWriter::write(std::uint32_t connection, const ros::Time& time, const rosbag::MessageInstance& message)
+{
+  const std::uint32_t length = message.size();
+  ros::serialization::OStream stream(beginMessage(connection, time, length), length);
+  message.write(stream);
+  endMessage();
+}
+
+void BagWriter::writeChunk()
+{
+  if (chunk_.empty())
+  {
+    return;
+  }
+  const auto size = static_cast<unsigned int>(chunk_.size());
+  const char* data = reinterpret_cast<const char*>(chunk_.data());
+  unsigned int data_size = size;
+  if (compression_ == Compression::kLz4)
+  {
+    compressed_.resize(size + size / 255 + 4096);
+    data_size = static_cast<unsigned int>(compressed_.size());
+    if (roslz4_buffToBuffCompress(reinterpret_cast<char*>(chunk_.data()), size, compressed_.data(), &data_size,
+                                  kLz4BlockSizeId) != ROSLZ4_OK)
+    {
+      throw std::runtime_error("cannot write " + path_ + ": LZ4 compression failed");
+    }
+    data = compressed_.data();
+  }
+  else if (compression_ == Compression::kBz2)
+  {
+    compressed_.resize(size + size / 100 + 4096);
+    data_size = static_cast<unsigned int>(compressed_.size());
+    if (BZ2_bzBuffToBuffCompress(compressed_.data(), &data_size, reinterpret_cast<char*>(chunk_.data()), size,
+                                 kBz2BlockSize, 0, kBz2WorkFactor) != BZ_OK)
+    {
+      throw std::runtime_error("cannot write " + path_ + ": BZ2 compression failed");
+    }
+    data = compressed_.data();
+  }
+
+  ChunkInfo info{ position_, chunk_start_, chunk_end_, {} };
+  header_.clear();
+  const std::string compression = toString(compression_);
+  appendField(&header_, "compression", compression.data(), compression.size());
+  appendOp(&header_, kOpChunk);
+  appendField(&header_, "size", static_cast<std::uint32_t>(size));
+  std::vector<std::uint8_t> record;
+  appendU32(&record, static_cast<std::uint32_t>(header_.size()));
+  record.insert(record.end(), header_.begin(), header_.end());
+  appendU32(&record, data_size);
+  writeBytes(record.data(), record.size());
+  writeBytes(data, data_size);
+
+  // One index record per connection in the chunk: time and offset of each of its messages.
+  record.clear();
+  for (std::uint32_t id = 0; id < chunk_index_.size(); ++id)
+  {
+    std::vector<IndexEntry>& entries = chunk_index_[id];
+    if (entries.empty())
+    {
+      continue;
+    }
+    info.counts.emplace_back(id, static_cast<std::uint32_t>(entries.size()));
+    header_.clear();
+    appendField(&header_, "conn", id);
+    appendField(&header_, "count", static_cast<std::uint32_t>(entries.size()));
+    appendOp(&header_, kOpIndexData);
+    appendField(&header_, "ver", kIndexVersion);
+    appendU32(&record, static_cast<std::uint32_t>(header_.size()));
+    record.insert(record.end(), header_.begin(), header_.end());
+    appendU32(&record, static_cast<std::uint32_t>(12 * entries.size()));
+    for (const IndexEntry& e : entries)
+    {
+      appendU32(&record, e.time.sec);
+      appendU32(&record, e.time.nsec);
+      appendU32(&record, e.offset);
+    }
+    entries.clear();
+  }
+  writeBytes(record.data(), record.size());
+  chunks_.push_back(std::move(info));
+  chunk_.clear();
+  chunk_messages_ = 0;
+}
+
+void BagWriter::writeFileHeader(std::uint64_t index_position)
+{
+  header_.clear();
+  appendField(&header_, "chunk_count", static_cast<std::uint32_t>(chunks_.size()));
+  appendField(&header_, "conn_count", static_cast<std::uint32_t>(connections_.size()));
+  appendField(&header_, "index_pos", index_position);
+  appendOp(&header_, kOpFileHeader);
+  std::vector<std::uint8_t> record;
+  appendU32(&record, static_cast<std::uint32_t>(header_.size()));
+  record.insert(record.end(), header_.begin(), header_.end());
+  const std::uint32_t padding = kFileHeaderLength - static_cast<std::uint32_t>(header_.size());
+  appendU32(&record, padding);
+  record.resize(record.size() + padding, ' ');
+  writeBytes(record.data(), record.size());
+}
+
+void BagWriter::close()
+{
+  if (file_ == nullptr)
+  {
+    return;
+  }
+  writeChunk();
+  const std::uint64_t index_position = position_;
+  std::vector<std::uint8_t> records;
+  for (std::uint32_t id = 0; id < connections_.size(); ++id)
+  {
+    appendConnectionRecord(&records, id, connections_[id].topic, connections_[id].header);
+  }
+  for (const ChunkInfo& chunk : chunks_)
+  {
+    header_.clear();
+    appendField(&header_, "chunk_pos", chunk.position);
+    appendField(&header_, "count", static_cast<std::uint32_t>(chunk.counts.size()));
+    appendField(&header_, "end_time", chunk.end);
+    appendOp(&header_, kOpChunkInfo);
+    appendField(&header_, "start_time", chunk.start);
+    appendField(&header_, "ver", kChunkInfoVersion);
+    appendU32(&records, static_cast<std::uint32_t>(header_.size()));
+    records.insert(records.end(), header_.begin(), header_.end());
+    appendU32(&records, static_cast<std::uint32_t>(8 * chunk.counts.size()));
+    for (const auto& [id, count] : chunk.counts)
+    {
+      appendU32(&records, id);
+      appendU32(&records, count);
+    }
+  }
+  writeBytes(records.data(), records.size());
+  if (std::fseek(file_, sizeof kMagic - 1, SEEK_SET) != 0)
+  {
+    throw std::runtime_error("cannot write " + path_ + ": " + std::strerror(errno));
+  }
+  writeFileHeader(index_position);
+  std::FILE* file = file_;
+  file_ = nullptr;
+  if (std::fclose(file) != 0)
+  {
+    throw std::runtime_error("cannot write " + path_ + ": " + std::strerror(errno));
+  }
+}
+
+void BagWriter::writeBytes(const void* data, std::size_t size)
+{
+  if (size > 0 && std::fwrite(data, 1, size, file_) != size)
+  {
+    throw std::runtime_error("cannot write " + path_ + ": " + std::strerror(errno));
+  }
+  position_ += size;
+}
+}  // namespace periodic_bias_compensation
