@@ -109,7 +109,8 @@ void appendConnectionRecord(std::vector<std::uint8_t>* out, std::uint32_t id, co
 constexpr std::uint32_t kMessageHeaderLength = (4 + 5 + 4) + (4 + 3 + 1) + (4 + 5 + 8);
 }  // namespace
 
-BagWriter::BagWriter(const std::string& path, Compression compression, std::uint32_t chunk_threshold)
+BagWriter::BagWriter(const std::string& path, Compression compression, bool background,
+                     std::uint32_t chunk_threshold)
   : path_(path), compression_(compression), chunk_threshold_(std::max<std::uint32_t>(chunk_threshold, 1))
 {
   file_ = std::fopen(path.c_str(), "wb");
@@ -117,13 +118,18 @@ BagWriter::BagWriter(const std::string& path, Compression compression, std::uint
   {
     throw std::runtime_error("cannot create " + path + ": " + std::strerror(errno));
   }
-  chunk_.reserve(chunk_threshold_ + 64 * 1024);
+  chunk_.data.reserve(chunk_threshold_ + 64 * 1024);
   writeBytes(kMagic, sizeof kMagic - 1);
   writeFileHeader(0);
+  if (background)
+  {
+    thread_ = std::thread([this] { runThread(); });
+  }
 }
 
 BagWriter::~BagWriter()
 {
+  stopThread();
   if (file_ != nullptr)
   {
     std::fclose(file_);
@@ -148,7 +154,6 @@ std::uint32_t BagWriter::addConnection(const std::string& topic, std::map<std::s
 {
   header["topic"] = topic;
   connections_.push_back(Connection{ topic, std::move(header), false });
-  chunk_index_.emplace_back();
   return static_cast<std::uint32_t>(connections_.size() - 1);
 }
 
@@ -163,17 +168,21 @@ std::uint8_t* BagWriter::beginMessage(std::uint32_t connection, const ros::Time&
   {
     // The first message of a connection follows its record, as rosbag writes it (rosbag
     // reindex finds connections there).
-    appendConnectionRecord(&chunk_, connection, c.topic, c.header);
+    appendConnectionRecord(&chunk_.data, connection, c.topic, c.header);
     c.written = true;
   }
-  chunk_start_ = chunk_messages_ == 0 ? time : std::min(chunk_start_, time);
-  chunk_end_ = chunk_messages_ == 0 ? time : std::max(chunk_end_, time);
-  ++chunk_messages_;
-  const std::size_t offset = chunk_.size();
-  chunk_index_[connection].push_back(IndexEntry{ time, static_cast<std::uint32_t>(offset) });
+  chunk_.start = chunk_.messages == 0 ? time : std::min(chunk_.start, time);
+  chunk_.end = chunk_.messages == 0 ? time : std::max(chunk_.end, time);
+  ++chunk_.messages;
+  const std::size_t offset = chunk_.data.size();
+  if (chunk_.index.size() <= connection)
+  {
+    chunk_.index.resize(connections_.size());
+  }
+  chunk_.index[connection].push_back(IndexEntry{ time, static_cast<std::uint32_t>(offset) });
 
-  chunk_.resize(offset + 4 + kMessageHeaderLength + 4 + length);
-  std::uint8_t* p = chunk_.data() + offset;
+  chunk_.data.resize(offset + 4 + kMessageHeaderLength + 4 + length);
+  std::uint8_t* p = chunk_.data.data() + offset;
   putU32(p, kMessageHeaderLength);
   p += 4;
   putU32(p, 5 + 4);
@@ -194,9 +203,9 @@ std::uint8_t* BagWriter::beginMessage(std::uint32_t connection, const ros::Time&
 
 void BagWriter::endMessage()
 {
-  if (chunk_.size() >= chunk_threshold_)
+  if (chunk_.data.size() >= chunk_threshold_)
   {
-    writeChunk();
+    finishChunk();
   }
 }
 
@@ -208,20 +217,94 @@ void BagWriter::write(std::uint32_t connection, const ros::Time& time, const ros
   endMessage();
 }
 
-void BagWriter::writeChunk()
+void BagWriter::finishChunk()
 {
-  if (chunk_.empty())
+  if (chunk_.messages == 0)
   {
     return;
   }
-  const auto size = static_cast<unsigned int>(chunk_.size());
-  const char* data = reinterpret_cast<const char*>(chunk_.data());
+  if (!thread_.joinable())
+  {
+    storeChunk(&chunk_);
+    return;
+  }
+  std::unique_lock<std::mutex> lock(mutex_);
+  changed_.wait(lock, [this] { return pending_.size() < 2 || error_; });
+  if (error_)
+  {
+    std::rethrow_exception(error_);
+  }
+  pending_.push_back(std::move(chunk_));
+  if (free_.empty())
+  {
+    chunk_ = Chunk();
+    chunk_.data.reserve(chunk_threshold_ + 64 * 1024);
+  }
+  else
+  {
+    chunk_ = std::move(free_.back());
+    free_.pop_back();
+  }
+  changed_.notify_all();
+}
+
+void BagWriter::runThread()
+{
+  std::unique_lock<std::mutex> lock(mutex_);
+  while (true)
+  {
+    changed_.wait(lock, [this] { return !pending_.empty() || stopping_; });
+    if (pending_.empty())
+    {
+      return;
+    }
+    Chunk chunk = std::move(pending_.front());
+    lock.unlock();
+    std::exception_ptr error;
+    try
+    {
+      storeChunk(&chunk);
+    }
+    catch (...)
+    {
+      error = std::current_exception();
+    }
+    lock.lock();
+    pending_.pop_front();
+    free_.push_back(std::move(chunk));
+    changed_.notify_all();
+    if (error)
+    {
+      error_ = error;
+      return;
+    }
+  }
+}
+
+void BagWriter::stopThread()
+{
+  if (!thread_.joinable())
+  {
+    return;
+  }
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    stopping_ = true;
+  }
+  changed_.notify_all();
+  thread_.join();
+}
+
+void BagWriter::storeChunk(Chunk* chunk)
+{
+  const auto size = static_cast<unsigned int>(chunk->data.size());
+  const char* data = reinterpret_cast<const char*>(chunk->data.data());
   unsigned int data_size = size;
   if (compression_ == Compression::kLz4)
   {
     compressed_.resize(size + size / 255 + 4096);
     data_size = static_cast<unsigned int>(compressed_.size());
-    if (roslz4_buffToBuffCompress(reinterpret_cast<char*>(chunk_.data()), size, compressed_.data(), &data_size,
+    if (roslz4_buffToBuffCompress(reinterpret_cast<char*>(chunk->data.data()), size, compressed_.data(), &data_size,
                                   kLz4BlockSizeId) != ROSLZ4_OK)
     {
       throw std::runtime_error("cannot write " + path_ + ": LZ4 compression failed");
@@ -232,7 +315,7 @@ void BagWriter::writeChunk()
   {
     compressed_.resize(size + size / 100 + 4096);
     data_size = static_cast<unsigned int>(compressed_.size());
-    if (BZ2_bzBuffToBuffCompress(compressed_.data(), &data_size, reinterpret_cast<char*>(chunk_.data()), size,
+    if (BZ2_bzBuffToBuffCompress(compressed_.data(), &data_size, reinterpret_cast<char*>(chunk->data.data()), size,
                                  kBz2BlockSize, 0, kBz2WorkFactor) != BZ_OK)
     {
       throw std::runtime_error("cannot write " + path_ + ": BZ2 compression failed");
@@ -240,62 +323,62 @@ void BagWriter::writeChunk()
     data = compressed_.data();
   }
 
-  ChunkInfo info{ position_, chunk_start_, chunk_end_, {} };
-  header_.clear();
+  ChunkInfo info{ position_, chunk->start, chunk->end, {} };
+  std::vector<std::uint8_t> header;
   const std::string compression = toString(compression_);
-  appendField(&header_, "compression", compression.data(), compression.size());
-  appendOp(&header_, kOpChunk);
-  appendField(&header_, "size", static_cast<std::uint32_t>(size));
-  std::vector<std::uint8_t> record;
-  appendU32(&record, static_cast<std::uint32_t>(header_.size()));
-  record.insert(record.end(), header_.begin(), header_.end());
-  appendU32(&record, data_size);
-  writeBytes(record.data(), record.size());
+  appendField(&header, "compression", compression.data(), compression.size());
+  appendOp(&header, kOpChunk);
+  appendField(&header, "size", static_cast<std::uint32_t>(size));
+  record_.clear();
+  appendU32(&record_, static_cast<std::uint32_t>(header.size()));
+  record_.insert(record_.end(), header.begin(), header.end());
+  appendU32(&record_, data_size);
+  writeBytes(record_.data(), record_.size());
   writeBytes(data, data_size);
 
   // One index record per connection in the chunk: time and offset of each of its messages.
-  record.clear();
-  for (std::uint32_t id = 0; id < chunk_index_.size(); ++id)
+  record_.clear();
+  for (std::uint32_t id = 0; id < chunk->index.size(); ++id)
   {
-    std::vector<IndexEntry>& entries = chunk_index_[id];
+    std::vector<IndexEntry>& entries = chunk->index[id];
     if (entries.empty())
     {
       continue;
     }
     info.counts.emplace_back(id, static_cast<std::uint32_t>(entries.size()));
-    header_.clear();
-    appendField(&header_, "conn", id);
-    appendField(&header_, "count", static_cast<std::uint32_t>(entries.size()));
-    appendOp(&header_, kOpIndexData);
-    appendField(&header_, "ver", kIndexVersion);
-    appendU32(&record, static_cast<std::uint32_t>(header_.size()));
-    record.insert(record.end(), header_.begin(), header_.end());
-    appendU32(&record, static_cast<std::uint32_t>(12 * entries.size()));
+    header.clear();
+    appendField(&header, "conn", id);
+    appendField(&header, "count", static_cast<std::uint32_t>(entries.size()));
+    appendOp(&header, kOpIndexData);
+    appendField(&header, "ver", kIndexVersion);
+    appendU32(&record_, static_cast<std::uint32_t>(header.size()));
+    record_.insert(record_.end(), header.begin(), header.end());
+    appendU32(&record_, static_cast<std::uint32_t>(12 * entries.size()));
     for (const IndexEntry& e : entries)
     {
-      appendU32(&record, e.time.sec);
-      appendU32(&record, e.time.nsec);
-      appendU32(&record, e.offset);
+      appendU32(&record_, e.time.sec);
+      appendU32(&record_, e.time.nsec);
+      appendU32(&record_, e.offset);
     }
     entries.clear();
   }
-  writeBytes(record.data(), record.size());
+  writeBytes(record_.data(), record_.size());
   chunks_.push_back(std::move(info));
-  chunk_.clear();
-  chunk_messages_ = 0;
+  chunk->data.clear();
+  chunk->messages = 0;
 }
 
 void BagWriter::writeFileHeader(std::uint64_t index_position)
 {
-  header_.clear();
-  appendField(&header_, "chunk_count", static_cast<std::uint32_t>(chunks_.size()));
-  appendField(&header_, "conn_count", static_cast<std::uint32_t>(connections_.size()));
-  appendField(&header_, "index_pos", index_position);
-  appendOp(&header_, kOpFileHeader);
+  std::vector<std::uint8_t> header;
+  appendField(&header, "chunk_count", static_cast<std::uint32_t>(chunks_.size()));
+  appendField(&header, "conn_count", static_cast<std::uint32_t>(connections_.size()));
+  appendField(&header, "index_pos", index_position);
+  appendOp(&header, kOpFileHeader);
   std::vector<std::uint8_t> record;
-  appendU32(&record, static_cast<std::uint32_t>(header_.size()));
-  record.insert(record.end(), header_.begin(), header_.end());
-  const std::uint32_t padding = kFileHeaderLength - static_cast<std::uint32_t>(header_.size());
+  appendU32(&record, static_cast<std::uint32_t>(header.size()));
+  record.insert(record.end(), header.begin(), header.end());
+  const std::uint32_t padding = kFileHeaderLength - static_cast<std::uint32_t>(header.size());
   appendU32(&record, padding);
   record.resize(record.size() + padding, ' ');
   writeBytes(record.data(), record.size());
@@ -307,7 +390,12 @@ void BagWriter::close()
   {
     return;
   }
-  writeChunk();
+  finishChunk();
+  stopThread();
+  if (error_)
+  {
+    std::rethrow_exception(error_);
+  }
   const std::uint64_t index_position = position_;
   std::vector<std::uint8_t> records;
   for (std::uint32_t id = 0; id < connections_.size(); ++id)
@@ -316,15 +404,15 @@ void BagWriter::close()
   }
   for (const ChunkInfo& chunk : chunks_)
   {
-    header_.clear();
-    appendField(&header_, "chunk_pos", chunk.position);
-    appendField(&header_, "count", static_cast<std::uint32_t>(chunk.counts.size()));
-    appendField(&header_, "end_time", chunk.end);
-    appendOp(&header_, kOpChunkInfo);
-    appendField(&header_, "start_time", chunk.start);
-    appendField(&header_, "ver", kChunkInfoVersion);
-    appendU32(&records, static_cast<std::uint32_t>(header_.size()));
-    records.insert(records.end(), header_.begin(), header_.end());
+    std::vector<std::uint8_t> header;
+    appendField(&header, "chunk_pos", chunk.position);
+    appendField(&header, "count", static_cast<std::uint32_t>(chunk.counts.size()));
+    appendField(&header, "end_time", chunk.end);
+    appendOp(&header, kOpChunkInfo);
+    appendField(&header, "start_time", chunk.start);
+    appendField(&header, "ver", kChunkInfoVersion);
+    appendU32(&records, static_cast<std::uint32_t>(header.size()));
+    records.insert(records.end(), header.begin(), header.end());
     appendU32(&records, static_cast<std::uint32_t>(8 * chunk.counts.size()));
     for (const auto& [id, count] : chunk.counts)
     {

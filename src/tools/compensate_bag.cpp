@@ -22,6 +22,7 @@
 #include <set>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <bzlib.h>
@@ -53,8 +54,8 @@ const char* const kUsage =
     "bias_state (plus ground_truth/* copied through) to OUT.bag. --params takes a YAML file with\n"
     "the keys of config/compensator.yaml; --mode overrides its 'mode'.\n"
     "--outputs: which of them to write, comma-separated (default: all four).\n"
-    "--compression: of OUT.bag's chunks (default: none, the fastest; lz4 about a third of the\n"
-    "size, bz2 the smallest and slowest).\n"
+    "--compression: of OUT.bag's chunks (default: none, the fastest; lz4 writes about a fifth of\n"
+    "the bytes, bz2 the fewest and is the slowest).\n"
     "--tune-gains also tunes paper mode's alpha/beta on IN.bag, which must be recorded while the\n"
     "vessel holds its station (moored, at anchor, on a bench: its slow motion is taken as zero),\n"
     "and writes them to GAINS.yaml as parameters (give it to --params or the node's rosparams).\n";
@@ -250,7 +251,7 @@ std::string checkOffsets(const RecordFields& file_header, const std::vector<std:
 
 /// Checks that every field of a record header lies inside it and picks out RecordFields.
 /// @return an empty string, or what is wrong
-std::string checkHeader(const std::string& header, std::uint64_t where, RecordFields* fields)
+std::string checkHeader(std::string_view header, std::uint64_t where, RecordFields* fields)
 {
   std::size_t offset = 0;
   while (offset < header.size())
@@ -266,19 +267,20 @@ std::string checkHeader(const std::string& header, std::uint64_t where, RecordFi
       return "record header at byte " + std::to_string(where) + " has a field of " + std::to_string(length) +
              " bytes in a header of " + std::to_string(header.size());
     }
-    const std::string field = header.substr(offset, length);
+    const std::string_view field = header.substr(offset, length);
     offset += length;
     const std::size_t equals = field.find('=');
-    const std::string name = field.substr(0, equals), value = equals == std::string::npos ? "" : field.substr(equals + 1);
-    for (auto [key, target] : { std::pair{ "op", &fields->op }, { "compression", &fields->compression },
-                                { "conn", &fields->conn }, { "count", &fields->count }, { "ver", &fields->ver },
-                                { "size", &fields->size }, { "index_pos", &fields->index_pos },
-                                { "conn_count", &fields->conn_count }, { "chunk_count", &fields->chunk_count },
-                                { "chunk_pos", &fields->chunk_pos } })
+    const std::string_view name = field.substr(0, equals),
+                           value = equals == std::string_view::npos ? std::string_view() : field.substr(equals + 1);
+    for (auto [key, target] : { std::pair{ std::string_view("op"), &fields->op },
+                                { "compression", &fields->compression }, { "conn", &fields->conn },
+                                { "count", &fields->count }, { "ver", &fields->ver }, { "size", &fields->size },
+                                { "index_pos", &fields->index_pos }, { "conn_count", &fields->conn_count },
+                                { "chunk_count", &fields->chunk_count }, { "chunk_pos", &fields->chunk_pos } })
     {
       if (name == key)
       {
-        *target = value;
+        target->assign(value);
       }
     }
   }
@@ -295,7 +297,7 @@ std::string checkRecord(const std::string& data, std::size_t offset, std::uint64
   {
     return "record at byte " + std::to_string(base + offset) + " inside a chunk runs past the chunk";
   }
-  const std::string why = checkHeader(data.substr(offset + 4, header_length), base + offset, fields);
+  const std::string why = checkHeader(std::string_view(data).substr(offset + 4, header_length), base + offset, fields);
   if (!why.empty())
   {
     return why;
@@ -322,7 +324,7 @@ struct ChunkLayout
   bool present = false;
   bool walked = false;               ///< records walked (decompressed first if need be): every record start is known
   std::uint64_t uncompressed_size = 0;
-  std::map<std::uint32_t, std::string> messages;  ///< offset of each message record -> its conn
+  std::vector<std::pair<std::uint32_t, std::string>> messages;  ///< offset of each message record (rising), its conn
 };
 
 /// A compressed chunk's data decompressed into *plain, as rosbag will (same libraries), so that
@@ -363,7 +365,7 @@ std::string walkChunk(const std::string& data, std::uint64_t base, ChunkLayout* 
     if (why.empty() && fields.op == std::string(1, kOpConnection))
     {
       RecordFields unused;
-      why = checkHeader(data.substr(data_begin, next - data_begin), base + data_begin, &unused);
+      why = checkHeader(std::string_view(data).substr(data_begin, next - data_begin), base + data_begin, &unused);
     }
     if (!why.empty())
     {
@@ -371,7 +373,7 @@ std::string walkChunk(const std::string& data, std::uint64_t base, ChunkLayout* 
     }
     if (fields.op == std::string(1, kOpMessage))
     {
-      layout->messages[static_cast<std::uint32_t>(offset)] = fields.conn;
+      layout->messages.emplace_back(static_cast<std::uint32_t>(offset), fields.conn);
     }
     offset = next;
   }
@@ -400,8 +402,10 @@ std::string checkIndex(const RecordFields& fields, const std::string& data, std:
   for (std::uint64_t i = 0; i < count; ++i)
   {
     const std::uint32_t offset = u32(data.data() + 12 * i + 8);
-    const auto message = chunk.messages.find(offset);
-    const bool points_at_message = chunk.walked ? message != chunk.messages.end() && message->second == fields.conn :
+    const auto message = std::lower_bound(chunk.messages.begin(), chunk.messages.end(), offset,
+                                          [](const auto& m, std::uint32_t o) { return m.first < o; });
+    const bool points_at_message = chunk.walked ? message != chunk.messages.end() && message->first == offset &&
+                                                      message->second == fields.conn :
                                                   offset + 8ULL <= chunk.uncompressed_size;
     if (!points_at_message)
     {
@@ -652,7 +656,8 @@ public:
                          [c](const InputConnection& i) { return i.id == c->id && i.role != Role::kSkip; });
     });
 
-    BagWriter out(temp_path, options_.compression);
+    // Compression in a thread of the writer: it overlaps reading and the core when a core is free.
+    BagWriter out(temp_path, options_.compression, options_.compression != BagWriter::Compression::kNone);
     std::size_t last = 0;  // messages of one connection tend to follow each other
     const ros::Time begin = all.getBeginTime();
     const double span = std::max((all.getEndTime() - begin).toSec(), 1e-9);

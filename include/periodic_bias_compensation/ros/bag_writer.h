@@ -2,7 +2,9 @@
 // pass, appending to an in-memory chunk and writing each chunk with one call. rosbag::Bag::write
 // seeks to the end of the file twice for every message (it may have been reading); a writer that
 // never reads needs none of that, and a message already serialised in another bag is copied as
-// its bytes (rosbag::MessageInstance), not deserialised.
+// its bytes (rosbag::MessageInstance), not deserialised. With `background`, full chunks are
+// compressed and written by a thread of the writer's own while the next one fills (at most two
+// chunks wait), so compression and file writes overlap the caller's work.
 //
 //   BagWriter out(path, BagWriter::Compression::kNone);
 //   const std::uint32_t odom = out.addConnection<nav_msgs::Odometry>("/odometry/filtered");
@@ -12,10 +14,15 @@
 // Errors (cannot open, write or compress) throw std::runtime_error naming the file.
 #pragma once
 
+#include <condition_variable>
 #include <cstdint>
 #include <cstdio>
+#include <deque>
+#include <exception>
 #include <map>
+#include <mutex>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include <ros/message_traits.h>
@@ -38,8 +45,9 @@ public:
   /// rosbag's own chunk size (rosbag::Bag's default chunk threshold).
   static constexpr std::uint32_t kDefaultChunkThreshold = 768 * 1024;
 
-  /// Creates (truncates) `path` and writes the bag's file header.
-  BagWriter(const std::string& path, Compression compression,
+  /// Creates (truncates) `path` and writes the bag's file header. `background`: chunks are
+  /// compressed and written by a thread (an error there is thrown by the next write() or close()).
+  BagWriter(const std::string& path, Compression compression, bool background = false,
             std::uint32_t chunk_threshold = kDefaultChunkThreshold);
   /// Closes the file without writing the index if close() was not called (the file is then
   /// incomplete: the caller removes it).
@@ -97,11 +105,23 @@ private:
     std::map<std::string, std::string> header;
     bool written = false;  ///< its record is in a chunk already
   };
+  struct Chunk
+  {
+    std::vector<std::uint8_t> data;                ///< its records, uncompressed
+    std::vector<std::vector<IndexEntry>> index;    ///< per connection
+    std::uint32_t messages = 0;
+    ros::Time start, end;
+  };
 
   /// Starts a message record of `length` data bytes in the chunk; returns where its data goes.
   std::uint8_t* beginMessage(std::uint32_t connection, const ros::Time& time, std::uint32_t length);
   void endMessage();
-  void writeChunk();
+  /// Hands the open chunk on (to the thread, or stores it) and opens an empty one.
+  void finishChunk();
+  /// Compresses and writes a chunk and its index records (in the thread, if there is one).
+  void storeChunk(Chunk* chunk);
+  void runThread();
+  void stopThread();
   void writeFileHeader(std::uint64_t index_position);
   void writeBytes(const void* data, std::size_t size);
 
@@ -109,14 +129,20 @@ private:
   std::FILE* file_ = nullptr;
   Compression compression_;
   std::uint32_t chunk_threshold_;
-  std::uint64_t position_ = 0;                      ///< file offset of the next byte written
   std::vector<Connection> connections_;
-  std::vector<std::uint8_t> chunk_;                 ///< records of the open chunk, uncompressed
+  Chunk chunk_;                                     ///< the open chunk
+  // Written by storeChunk only (the thread's while it runs).
+  std::uint64_t position_ = 0;                      ///< file offset of the next byte written
   std::vector<char> compressed_;
-  std::vector<std::vector<IndexEntry>> chunk_index_;  ///< per connection, for the open chunk
-  std::uint32_t chunk_messages_ = 0;
-  ros::Time chunk_start_, chunk_end_;
   std::vector<ChunkInfo> chunks_;
-  std::vector<std::uint8_t> header_;                ///< scratch for record headers
+  std::vector<std::uint8_t> record_;                ///< scratch for records
+  // The thread and what it shares.
+  std::thread thread_;
+  std::mutex mutex_;
+  std::condition_variable changed_;
+  std::deque<Chunk> pending_;                       ///< full chunks, oldest first
+  std::vector<Chunk> free_;                         ///< stored chunks, their buffers reused
+  bool stopping_ = false;
+  std::exception_ptr error_;
 };
 }  // namespace periodic_bias_compensation
