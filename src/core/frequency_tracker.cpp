@@ -10,13 +10,10 @@ namespace periodic_bias_compensation
 {
 struct FrequencyTracker::Plan
 {
-  explicit Plan(int n) : fft(n), n(n), in(fft.in), out(fft.out)
+  explicit Plan(int n) : fft(n)
   {
   }
   RealFft fft;
-  int n;
-  double* in;
-  fftw_complex* out;
   std::vector<double> power;
   std::vector<double> band_power;
   std::vector<double> window;  ///< Hann window for `window_length` samples
@@ -166,7 +163,7 @@ FrequencyEstimate FrequencyTracker::analyse(double f_min, double f_max, double m
   }
   const double window_sum = plan_->window_sum;
   const double* window = plan_->window.data();
-  double* in = plan_->in;
+  double* in = plan_->fft.in;
   for (int p = 0; p < 2; ++p)
   {
     for (int i = 0; i < lengths[p]; ++i)
@@ -174,7 +171,7 @@ FrequencyEstimate FrequencyTracker::analyse(double f_min, double f_max, double m
     in += lengths[p];
     window += lengths[p];
   }
-  std::fill(plan_->in + available, plan_->in + fft_size_, 0.0);
+  std::fill(plan_->fft.in + available, plan_->fft.in + fft_size_, 0.0);
   plan_->fft.execute();
 
   const double elapsed = times_[(head_ - 1 + n_) % n_] - times_[(head_ - available + n_) % n_];
@@ -191,7 +188,7 @@ FrequencyEstimate FrequencyTracker::analyse(double f_min, double f_max, double m
     return estimate;
   // Power only where it is read: the band and one bin either side (interpolation).
   for (int k = k_lo - 1; k <= k_hi + 1; ++k)
-    plan_->power[k] = plan_->out[k][0] * plan_->out[k][0] + plan_->out[k][1] * plan_->out[k][1];
+    plan_->power[k] = plan_->fft.power(k);
 
   int k_peak = k_lo;
   for (int k = k_lo; k <= k_hi; ++k)
