@@ -111,8 +111,8 @@ std::vector<sim::Sample> simulate(const sim::Scenario& scenario, std::uint64_t s
 
 /// The default mode's methods without the IMU's orientation (see main).
 const char* const kFixedLevel = "default, no orientation: one level frame";
-/// The default mode with heave from the harmonic model (heave_filter: false), as before issue 5's
-/// broadband heave: kept in the tables to show what the heave filter changes.
+/// The default mode with heave from the harmonic model (heave_filter: false), without the
+/// broadband estimate: kept in the tables to show what the heave filter changes.
 const char* const kHarmonicHeave = "default, harmonic heave";
 const char* const kGyroLevel = "default, no orientation: gyro attitude";
 const char* const kGyroLevelBias = "default, no orientation: gyro attitude, gyro bias estimated";
@@ -125,7 +125,7 @@ constexpr double kStationRadius = 50.0;
 constexpr std::uint64_t kTrainingSeed = 1000;
 
 /// Errors of one method on one run, per axis.
-/// Elapsed times at which the slow-motion error is reported (issue 5: 60 s, 10 min, 30 min) [s].
+/// Elapsed times at which the slow-motion error is reported (60 s, 10 min, 30 min) [s].
 constexpr std::array<double, 3> kCheckpoints = { 60.0, 600.0, 1800.0 };
 
 struct Errors
@@ -139,7 +139,7 @@ struct Errors
   Vector3 total_rms = Vector3::Constant(NAN);  ///< RMS(filtered + wave - true position) after settling [m]
   Vector3 wave_rms_percent = Vector3::Constant(NAN);  ///< RMS(wave - true wave) / RMS(true wave) [%]
   /// RMS(wave - true wave) / significant wave height [%], Hs = 4 std(true wave) per axis (for z the
-  /// usual significant wave height of heave; issue 5's metric).
+  /// usual significant wave height of heave).
   Vector3 wave_hs_percent = Vector3::Constant(NAN);
 };
 

@@ -86,7 +86,7 @@ TEST(Compensator, ConstantBiasAtRestVanishesInBothModes)
 TEST(Compensator, DefaultModeMeetsTheBenchTargetsCausally)
 {
   // Bench recordings: shaken at 0.3-0.6 Hz by 2-10 cm, low-cost bias and noise, 87.7 Hz, 60 s,
-  // moving from the first sample (no still period). Targets from issue 2: filtered within 6 cm
+  // moving from the first sample (no still period). Targets: filtered within 6 cm
   // of the true slow motion (zero) after 60 s, wave within 10 % RMS after 20 s.
   int cases = 0;
   for (double f : { 0.3, 0.443, 0.6 })

@@ -1,4 +1,4 @@
-// Reliability of the estimation core against run-time faults and long runs (issue 6), without a
+// Reliability of the estimation core against run-time faults and long runs, without a
 // master: the simulator's scenarios streamed through the Compensator as the wrapper feeds it.
 //   - invalid and extreme gains while data flows: refused with a message and the estimate is
 //     bit-for-bit the one of a reference run without the requests; extreme valid gains stay bounded

@@ -1,4 +1,4 @@
-// Issue 3: every shipped scenario produces a bag that the compensator consumes. For each file
+// Every shipped scenario produces a bag that the compensator consumes. For each file
 // of config/scenarios/: simulate_imu --duration 60 -> bag, compensate_bag -> bag, then read
 // the output with the rosbag C++ API: one odometry/filtered per imu/data message (compensate_bag
 // writes one per accepted sample and counts what it rejects), every value finite.
