@@ -314,6 +314,9 @@ Report diagnose(const Recording& real_in, const sim::Scenario& scenario_in, cons
     std::snprintf(buf, sizeof(buf), "%.3g %% of samples missing in %.0f gaps (mean %.3g samples)", 100 * st.lost_fraction,
                   st.bursts, st.mean_burst);
     rep.direct.push_back({ "dropouts", st.bursts > 0, buf });
+    const double repeated = repeatedFraction(real.data);
+    std::snprintf(buf, sizeof(buf), "%.3g %% of the samples repeat their predecessor in all six channels", 100 * repeated);
+    rep.direct.push_back({ "sample_hold", repeated > 0.02, buf });
     std::string lat, clip;
     bool any_lat = false, any_clip = false;
     for (int c = 0; c < kChannels; ++c)

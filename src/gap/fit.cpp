@@ -166,6 +166,7 @@ struct FitStats
   Vec lattice = Vec(kChannels, 0.0);
   Vec flat = Vec(kChannels, 0.0);
   Vec limit = Vec(kChannels, 0.0);
+  double repeated = 0.0;  ///< rows equal to their predecessor [-]
   Vec temp_slope = Vec(kChannels, 0.0);
   Eigen::Vector3d lever = Eigen::Vector3d::Zero();
   bool lever_ok = false;
@@ -269,6 +270,7 @@ FitStats fitStats(const Recording& r, double rate, int nseg, const std::vector<i
     s.flat[c] = flatTopFraction(x, &lim);
     s.limit[c] = lim;
   }
+  s.repeated = repeatedFraction(r.data);
   s.cross[0] = welchCross3(r.data.leftCols(3), rate, nseg);
   s.cross[1] = welchCross3(r.data.rightCols(3), rate, nseg);
   s.stamps = stampStats(r.stamp, rate);
@@ -1175,6 +1177,17 @@ std::vector<Candidate> fitCandidates(const Recording& real_fit, const std::vecto
       e.params["gyro_coefficient"] = clampVec(gyr, -1, 1);
       e.params["reference_temperature"] = { ref };
       out.push_back(make("thermal_drift", { e }, "slope of 32 block means against temperature, real minus ensemble"));
+    }
+  }
+
+  // sample_hold: readings repeated more often than in the ensemble
+  {
+    const Cmp m = compare(R, S, [](const FitStats& s) { return s.repeated; });
+    if (m.real > 0.02 && m.real > 2.0 * m.sim + 0.01)
+    {
+      sim::EffectSpec e{ "sample_hold", true, {} };
+      e.params["sensor_rate"] = { rate * (1.0 - m.real) };
+      out.push_back(make("sample_hold", { e }, "rows repeating their predecessor: sensor rate = rate x (1 - fraction)"));
     }
   }
 

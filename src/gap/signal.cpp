@@ -338,12 +338,31 @@ double flatTopFraction(const Eigen::Ref<const Eigen::VectorXd>& x, double* limit
   {
     return 0.0;
   }
-  std::size_t count = 0;
+  std::size_t count = 0, runs = 0;
+  bool previous_at_limit = false;
   for (Eigen::Index i = 0; i < x.size(); ++i)
   {
-    count += std::abs(x[i]) >= m * (1.0 - 1e-12) ? 1 : 0;
+    const bool at_limit = std::abs(x[i]) >= m * (1.0 - 1e-12);
+    count += at_limit ? 1 : 0;
+    runs += at_limit && !previous_at_limit ? 1 : 0;
+    previous_at_limit = at_limit;
   }
-  return count < 3 ? 0.0 : static_cast<double>(count) / x.size();
+  // Clipping reaches the limit again and again; one held reading at the peak is one run.
+  return count < 3 || runs < 2 ? 0.0 : static_cast<double>(count) / x.size();
+}
+
+double repeatedFraction(const Eigen::MatrixXd& data)
+{
+  if (data.rows() < 2)
+  {
+    return 0.0;
+  }
+  Eigen::Index repeated = 0;
+  for (Eigen::Index i = 1; i < data.rows(); ++i)
+  {
+    repeated += data.row(i) == data.row(i - 1) ? 1 : 0;
+  }
+  return static_cast<double>(repeated) / (data.rows() - 1);
 }
 
 double estimateRate(const Recording& recording)

@@ -115,6 +115,11 @@ std::vector<EffectInfo> buildVocabulary()
                   scalar("pitch", "rad", 0.0, -1.5, 1.5, "pitch error"),
                   scalar("yaw", "rad", 0.0, -3.2, 3.2, "yaw error") },
                 8 });
+  v.push_back({ "sample_hold",
+                "the driver polls faster than the sensor updates: a new reading every 1 / sensor_rate s, "
+                "repeated in between",
+                { scalar("sensor_rate", "Hz", 0.0, 0.0, 1e5, "the sensor's own update rate (0 = off)") },
+                8 });
   v.push_back({ "timestamp_jitter", "stamp = t + offset + N(0, sigma^2)",
                 { scalar("sigma", "s", 0.0, 0.0, 1.0, "standard deviation of the stamp error"),
                   scalar("offset", "s", 0.0, -10.0, 10.0, "constant stamp delay") },
@@ -503,6 +508,44 @@ private:
   Rng rng_;
 };
 
+/// Zero-order hold at the sensor's rate: measurements and orientation repeat until the next
+/// reading (the stamps do not: the driver stamps each poll).
+class SampleHold : public Effect
+{
+public:
+  explicit SampleHold(const EffectSpec& spec) : interval_(num(spec, "sensor_rate") > 0.0 ? 1.0 / num(spec, "sensor_rate") : 0.0)
+  {
+  }
+  void apply(const EffectInput& in, ImuOutput& out) override
+  {
+    if (interval_ <= 0.0)
+      return;
+    // A reading is due at every multiple of the interval; a poll takes the newest one. The
+    // tolerance keeps a poll that lands on a reading's time (equal rates) from missing it.
+    const double reading = std::floor(in.elapsed / interval_ + 1e-9);
+    if (!held_ || reading != reading_)
+    {
+      held_ = true;
+      reading_ = reading;
+      accel_ = out.accel;
+      gyro_ = out.gyro;
+      orientation_ = out.orientation;
+      return;
+    }
+    out.accel = accel_;
+    out.gyro = gyro_;
+    out.orientation = orientation_;
+  }
+
+private:
+  double interval_;
+  bool held_ = false;
+  double reading_ = 0.0;
+  Vector3 accel_ = Vector3::Zero();
+  Vector3 gyro_ = Vector3::Zero();
+  Quaternion orientation_ = Quaternion::Identity();
+};
+
 class Dropouts : public Effect
 {
 public:
@@ -612,6 +655,7 @@ std::unique_ptr<Effect> makeEffect(const EffectSpec& spec, std::uint64_t seed, d
     { "saturation", [](const EffectSpec& e, std::uint64_t, double) { return std::make_unique<Saturation>(e); } },
     { "quantization", [](const EffectSpec& e, std::uint64_t, double) { return std::make_unique<Quantization>(e); } },
     { "gravity_leakage", [](const EffectSpec& e, std::uint64_t, double) { return std::make_unique<GravityLeakage>(e); } },
+    { "sample_hold", [](const EffectSpec& e, std::uint64_t, double) { return std::make_unique<SampleHold>(e); } },
     { "timestamp_jitter",
       [](const EffectSpec& e, std::uint64_t s, double) { return std::make_unique<TimestampJitter>(e, s); } },
     { "dropouts", [](const EffectSpec& e, std::uint64_t s, double) { return std::make_unique<Dropouts>(e, s); } },

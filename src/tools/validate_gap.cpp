@@ -173,6 +173,11 @@ std::vector<sim::EffectSpec> withheldEffect(const std::string& name, double k, c
     e.params["sigma"] = { 0.1 * k / base.rate };
     e.params["offset"] = { 0.0 };
   }
+  else if (name == "sample_hold")
+  {
+    // a sensor at half the polling rate (k = 1: half the samples repeat), or 85 % of it
+    e.params["sensor_rate"] = { base.rate * (1.0 - 0.5 * k) };
+  }
   else if (name == "dropouts")
   {
     e.params["probability"] = { 0.003 * k };
@@ -424,7 +429,8 @@ int main(int argc, char** argv)
   const std::vector<std::string> effects = { "lever_arm",      "misalignment",     "scale_factor",  "constant_bias",
                                              "periodic_bias",  "thermal_drift",    "bias_random_walk",
                                              "bias_instability", "vibration",      "white_noise",   "saturation",
-                                             "quantization",   "gravity_leakage",  "timestamp_jitter", "dropouts" };
+                                             "quantization",   "gravity_leakage",  "sample_hold",   "timestamp_jitter",
+                                             "dropouts" };
   // "sea-foreign": the same sea, but "real" is written by foreignRecording() (another noise
   // generator, other motion details), for the effects it knows.
   std::vector<std::string> motions = { "static", "sinusoids", "sea", "sea-foreign" };

@@ -101,6 +101,27 @@ TEST(GapSignal, LatticeFlatTopsAndStamps)
   EXPECT_LT(s.jitter, 1e-9);
 }
 
+TEST(GapSignal, RepeatedReadingsAreNotClipping)
+{
+  // A driver polling twice as fast as the sensor: every reading twice, the peak included.
+  Eigen::MatrixXd data(2000, 6);
+  std::mt19937_64 rng(7);
+  std::normal_distribution<double> n(0.0, 1.0);
+  for (Eigen::Index i = 0; i < data.rows(); i += 2)
+  {
+    for (int c = 0; c < 6; ++c)
+    {
+      data(i, c) = n(rng);
+    }
+    data.row(i + 1) = data.row(i);
+  }
+  EXPECT_NEAR(gap::repeatedFraction(data), 1000.0 / 1999.0, 1e-12);
+  EXPECT_EQ(gap::flatTopFraction(data.col(0)), 0.0);
+  // Clipped, the same samples reach the limit in many separate runs.
+  EXPECT_GT(gap::flatTopFraction(data.col(0).cwiseMin(1.0).cwiseMax(-1.0)), 0.1);
+  EXPECT_EQ(gap::repeatedFraction(data.topRows(1)), 0.0);
+}
+
 sim::Scenario sinusoidBase()
 {
   sim::Scenario s;
@@ -139,6 +160,21 @@ TEST(GapDiagnose, NamesAWithheldVibrationAndShrinksTheGap)
                            "\"gap_before\"", "\"gap_after\"", "\"shrink\"" })
   {
     EXPECT_NE(json.find(key), std::string::npos) << key;
+  }
+}
+
+TEST(GapDiagnose, NamesRepeatedSamples)
+{
+  const sim::Scenario base = sinusoidBase();
+  sim::Scenario real_s = base;
+  sim::EffectSpec hold{ "sample_hold", true, {} };
+  hold.params["sensor_rate"] = { 0.25 * base.rate };  // 75 % of the rows repeat, as in some drivers
+  real_s.effects.push_back(hold);
+  const gap::Report rep = gap::diagnose(gap::simulateRecording(real_s, 31337), base, gap::DiagnoseOptions());
+  EXPECT_EQ(rep.verdict_effect, "sample_hold") << gap::reportSummary(rep);
+  for (const auto& d : rep.direct)
+  {
+    EXPECT_EQ(d.detected, d.effect == "sample_hold") << d.effect << ": " << d.evidence;
   }
 }
 

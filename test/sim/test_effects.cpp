@@ -314,6 +314,38 @@ TEST(Effects, QuantizationPutsOutputOnLattice)
   EXPECT_GT(largest, 0.4 * step);
 }
 
+TEST(Effects, SampleHoldRepeatsReadingsBetweenSensorUpdates)
+{
+  // A 100 Hz driver polling a 30 Hz sensor: 70 % of the samples repeat their predecessor, the
+  // readings change 30 times a second, and a stamp is never repeated.
+  const double rate = 100.0, sensor_rate = 30.0;
+  sim::Scenario s = shaken(rate, 20.0);
+  s.effects.push_back(effect("white_noise", { { "accel_density", { 2e-3 } }, { "gyro_density", { 1e-4 } } }));
+  s.effects.push_back(effect("sample_hold", { { "sensor_rate", { sensor_rate } } }));
+  const sim_test::Errors held = run(s, 1, true);
+  s.effects.pop_back();
+  const sim_test::Errors fresh = run(s, 1, true);
+  ASSERT_EQ(held.samples.size(), fresh.samples.size());
+  int repeated = 0, fresh_repeated = 0;
+  for (std::size_t k = 1; k < held.samples.size(); ++k)
+  {
+    const sim::Sample& a = held.samples[k - 1];
+    const sim::Sample& b = held.samples[k];
+    const bool same = a.accel == b.accel && a.gyro == b.gyro && a.orientation.coeffs() == b.orientation.coeffs();
+    repeated += same ? 1 : 0;
+    fresh_repeated += fresh.samples[k - 1].accel == fresh.samples[k].accel ? 1 : 0;
+    EXPECT_GT(b.stamp, a.stamp);
+    if (!same)
+    {
+      // A new reading is the sensor's value at that poll, as without the hold.
+      EXPECT_EQ(b.accel, fresh.samples[k].accel) << k;
+    }
+  }
+  const double fraction = static_cast<double>(repeated) / (held.samples.size() - 1);
+  EXPECT_NEAR(fraction, 1.0 - sensor_rate / rate, 0.01);
+  EXPECT_EQ(fresh_repeated, 0);
+}
+
 TEST(Effects, SaturationFlatTops)
 {
   sim::Scenario s = staticScenario(100.0, 20.0);

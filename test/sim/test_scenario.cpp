@@ -118,7 +118,7 @@ TEST(Scenario, VocabularyHasEveryEffectWithUnits)
   const std::vector<std::string> names = { "white_noise",   "constant_bias", "bias_random_walk", "bias_instability",
                                            "periodic_bias", "thermal_drift", "scale_factor",     "misalignment",
                                            "gravity_leakage", "lever_arm",   "vibration",        "quantization",
-                                           "saturation",    "timestamp_jitter", "dropouts" };
+                                           "saturation",    "sample_hold",   "timestamp_jitter", "dropouts" };
   EXPECT_EQ(sim::effectVocabulary().size(), names.size());
   for (const std::string& n : names)
   {

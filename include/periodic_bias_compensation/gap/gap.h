@@ -98,8 +98,14 @@ double gaussMarkovAllanVariance(double tau, double tc);
 /// least 99 % of the values, with fewer distinct values than half the samples.
 double latticeStep(const Eigen::Ref<const Eigen::VectorXd>& x);
 
-/// Fraction of samples whose magnitude equals the largest magnitude (flat tops of clipping).
+/// Fraction of samples whose magnitude equals the largest magnitude (flat tops of clipping); 0
+/// unless the largest magnitude is reached in two separate runs or more (one reading held over
+/// several polls at the peak is not clipping).
 double flatTopFraction(const Eigen::Ref<const Eigen::VectorXd>& x, double* limit = nullptr);
+
+/// Fraction of rows equal to their predecessor in every channel (a driver polling faster than the
+/// sensor updates repeats its last reading).
+double repeatedFraction(const Eigen::MatrixXd& data);
 
 /// Stamp statistics: residual of a straight-line fit of stamp against the sample index implied
 /// by the nominal rate, and the lost samples that index implies.
