@@ -21,20 +21,6 @@ double lg(double v)
   return std::log10(std::max(v, 1e-300));
 }
 
-double median(std::vector<double> v)
-{
-  if (v.empty())
-  {
-    return std::nan("");
-  }
-  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-  double m = v[v.size() / 2];
-  if (v.size() % 2 == 0)
-  {
-    m = 0.5 * (m + *std::max_element(v.begin(), v.begin() + v.size() / 2));
-  }
-  return m;
-}
 
 bool isAccel(int c)
 {

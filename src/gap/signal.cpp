@@ -365,6 +365,21 @@ double repeatedFraction(const Eigen::MatrixXd& data)
   return static_cast<double>(repeated) / (data.rows() - 1);
 }
 
+double median(std::vector<double> v)
+{
+  if (v.empty())
+  {
+    return std::nan("");
+  }
+  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+  double m = v[v.size() / 2];
+  if (v.size() % 2 == 0)
+  {
+    m = 0.5 * (m + *std::max_element(v.begin(), v.begin() + v.size() / 2));
+  }
+  return m;
+}
+
 double estimateRate(const Recording& recording)
 {
   const std::size_t n = recording.size();
@@ -378,8 +393,7 @@ double estimateRate(const Recording& recording)
   {
     dt.push_back(recording.stamp[i] - recording.stamp[i - 1]);
   }
-  std::nth_element(dt.begin(), dt.begin() + dt.size() / 2, dt.end());
-  const double med = dt[dt.size() / 2];
+  const double med = median(std::move(dt));
   return med > 0.0 ? 1.0 / med : 0.0;
 }
 

@@ -38,6 +38,7 @@
 #include <sensor_msgs/Imu.h>
 #include <sensor_msgs/Temperature.h>
 
+#include "periodic_bias_compensation/gap/csv.h"
 #include "periodic_bias_compensation/gap/gap.h"
 #include "periodic_bias_compensation/sim/scenario.h"
 #include "periodic_bias_compensation/tools/command_line.h"
@@ -169,193 +170,19 @@ gap::Recording readBag(const Options& o)
   return r;
 }
 
-std::vector<std::string> split(const std::string& s, char sep)
-{
-  std::vector<std::string> out;
-  std::string cur;
-  bool quoted = false;
-  for (char c : s)
-  {
-    if (c == '"')
-    {
-      quoted = !quoted;
-    }
-    else if (c == sep && !quoted)
-    {
-      out.push_back(cur);
-      cur.clear();
-    }
-    else if (c != '\r')
-    {
-      cur += c;
-    }
-  }
-  out.push_back(cur);
-  return out;
-}
-
-std::string trim(const std::string& s)
-{
-  const auto a = s.find_first_not_of(" \t");
-  const auto b = s.find_last_not_of(" \t");
-  return a == std::string::npos ? "" : s.substr(a, b - a + 1);
-}
-
 gap::Recording readCsv(const Options& o)
 {
-  std::ifstream in(o.real_csv);
-  if (!in)
-  {
-    throw std::runtime_error("cannot read " + o.real_csv);
-  }
-  std::string line;
-  for (int i = 0; i < o.skip_lines && std::getline(in, line); ++i)
-  {
-  }
-  if (!std::getline(in, line))
-  {
-    throw std::runtime_error(o.real_csv + ": no header line");
-  }
-  const std::vector<std::string> header = split(line, ',');
-  std::map<std::string, std::pair<int, double>> col;  // key -> column, sign
-  for (const std::string& item : split(o.columns, ','))
-  {
-    const auto eq = item.find('=');
-    if (eq == std::string::npos)
-    {
-      throw UsageError("--columns item '" + item + "' is not key=column");
-    }
-    const std::string key = trim(item.substr(0, eq));
-    std::string name = trim(item.substr(eq + 1));
-    double sign = 1.0;
-    if (!name.empty() && name[0] == '-')
-    {
-      sign = -1.0;
-      name = name.substr(1);
-    }
-    int index = -1;
-    for (std::size_t i = 0; i < header.size(); ++i)
-    {
-      if (trim(header[i]) == name)
-      {
-        index = static_cast<int>(i);
-      }
-    }
-    if (index < 0 && !name.empty() && std::all_of(name.begin(), name.end(), ::isdigit))
-    {
-      index = std::stoi(name);
-    }
-    if (index < 0)
-    {
-      throw UsageError("--columns: no column '" + name + "' in " + o.real_csv);
-    }
-    col[key] = { index, sign };
-  }
-  const char* keys[6] = { "ax", "ay", "az", "gx", "gy", "gz" };
-  for (const char* k : keys)
-  {
-    if (!col.count(k))
-    {
-      throw UsageError(std::string("--columns needs ") + k);
-    }
-  }
-  const bool has_t = col.count("t") > 0;
-  if (!has_t && o.rate <= 0)
-  {
-    throw UsageError("without a t column, --rate is required");
-  }
-  gap::Recording r;
-  r.source = o.real_csv;
-  std::vector<std::array<double, 6>> rows;
-  std::vector<double> temps;
-  const bool has_temp = col.count("temp") > 0;
-  const char* truth_keys[7] = { "px", "py", "pz", "qw", "qx", "qy", "qz" };
-  int truth_cols = 0;
-  for (const char* key : truth_keys)
-  {
-    truth_cols += col.count(key) > 0 ? 1 : 0;
-  }
-  if (truth_cols != 0 && truth_cols != 7)
-  {
-    throw UsageError("--columns: truth needs all of px,py,pz,qw,qx,qy,qz");
-  }
-  const bool has_truth = truth_cols == 7 && o.use_truth;
-  std::size_t k = 0;
-  while (std::getline(in, line))
-  {
-    const std::vector<std::string> f = split(line, ',');
-    try
-    {
-      std::array<double, 6> v;
-      for (int c = 0; c < 6; ++c)
-      {
-        const auto& [idx, sign] = col[keys[c]];
-        v[c] = sign * std::stod(f.at(idx)) * (c < 3 ? o.accel_scale : o.gyro_scale);
-      }
-      const double t = has_t ? std::stod(f.at(col["t"].first)) * o.time_scale : k / o.rate;
-      double tv = 0.0;
-      if (has_temp)
-      {
-        tv = std::stod(f.at(col["temp"].first));
-      }
-      bool finite = std::isfinite(t);
-      for (double a : v)
-      {
-        finite = finite && std::isfinite(a);
-      }
-      if (!finite)
-      {
-        continue;
-      }
-      if (has_truth)
-      {
-        double q[7];
-        for (int j = 0; j < 7; ++j)
-        {
-          const auto& [idx, sign] = col[truth_keys[j]];
-          q[j] = sign * std::stod(f.at(idx)) * (j < 3 ? o.truth_position_scale : 1.0);
-        }
-        const Eigen::Quaterniond qn = Eigen::Quaterniond(q[3], q[4], q[5], q[6]);
-        if (!(qn.norm() > 0.5))
-        {
-          continue;
-        }
-        r.truth.stamp.push_back(t);
-        r.truth.position.emplace_back(q[0], q[1], q[2]);
-        r.truth.orientation.push_back(qn.normalized());
-      }
-      rows.push_back(v);
-      r.stamp.push_back(t);
-      temps.push_back(tv);
-      ++k;
-    }
-    catch (const std::exception&)
-    {
-      continue;  // not a data line
-    }
-  }
-  if (rows.size() < 200)
-  {
-    throw std::runtime_error(o.real_csv + ": only " + std::to_string(rows.size()) + " data lines");
-  }
-  r.data.resize(rows.size(), gap::kChannels);
-  for (std::size_t i = 0; i < rows.size(); ++i)
-  {
-    for (int c = 0; c < 6; ++c)
-    {
-      r.data(i, c) = rows[i][c];
-    }
-  }
-  if (has_temp)
-  {
-    r.has_temperature = true;
-    r.temperature = temps;
-  }
-  if (o.rate > 0)
-  {
-    r.rate = o.rate;
-  }
-  return r;
+  gap::CsvOptions csv;
+  csv.path = o.real_csv;
+  csv.columns = o.columns;
+  csv.skip_lines = o.skip_lines;
+  csv.accel_scale = o.accel_scale;
+  csv.gyro_scale = o.gyro_scale;
+  csv.time_scale = o.time_scale;
+  csv.truth_position_scale = o.truth_position_scale;
+  csv.rate = o.rate;
+  csv.use_truth = o.use_truth;
+  return gap::readCsv(csv);
 }
 
 /// Stamps shifted so that the first is 1000 s (the simulator's start), rate fixed.
@@ -524,10 +351,25 @@ int main(int argc, char** argv)
     std::cerr << "diagnose_gap: " << e.what() << "\n" << kUsage;
     return 2;
   }
+  sim::Scenario scenario;
+  gap::Recording real;
   try
   {
-    const sim::Scenario scenario = sim::loadScenario(o.scenario);
-    gap::Recording real = o.real.empty() ? readCsv(o) : readBag(o);
+    scenario = sim::loadScenario(o.scenario);
+    real = o.real.empty() ? readCsv(o) : readBag(o);
+  }
+  catch (const gap::CsvOptionError& e)
+  {
+    std::cerr << "diagnose_gap: " << e.what() << "\n" << kUsage;
+    return 2;
+  }
+  catch (const std::exception& e)
+  {
+    std::cerr << "diagnose_gap: " << e.what() << "\n";
+    return 1;
+  }
+  try
+  {
     normalise(&real, o.max_duration);
     const gap::Report rep = gap::diagnose(real, scenario, o.diag);
     fs::create_directories(o.out);

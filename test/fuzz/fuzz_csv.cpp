@@ -1,16 +1,16 @@
-// Fuzz target: the CSV reader of diagnose_gap (readCsv in src/tools/diagnose_gap.cpp, compiled
-// here with its main renamed). The first input byte picks a --columns map (names, indices,
-// negated columns, a missing key, no t column with or without --rate), the second --skip-lines,
-// the rest is the CSV text. Allowed outcomes: a recording whose stamps and data are all finite
-// and consistent in size, or a std::exception with a message (the tool's main catches those).
-#define main diagnose_gap_main
-#include "../../src/tools/diagnose_gap.cpp"
-#undef main
-
+// Fuzz target: the CSV reader of diagnose_gap (gap::readCsv). The first input byte picks a
+// --columns map (names, indices, negated columns, a missing key, an unknown key, no t column with
+// or without --rate), the second --skip-lines, the rest is the CSV text. Allowed outcomes: a
+// recording whose stamps and data are all finite and consistent in size, or a std::exception
+// with a message (the tool's main catches those).
 #include <unistd.h>
 
+#include <cmath>
 #include <cstdint>
 #include <fstream>
+#include <string>
+
+#include "periodic_bias_compensation/gap/csv.h"
 
 #include "fuzz_input.h"
 
@@ -27,12 +27,14 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     "t=99999999999999999999,ax=1,ay=2,az=3,gx=4,gy=5,gz=6",
     "t=0,ax=1,ay=2,az=3,gx=4,gy=5,gz=6,temp=7",
     "t,ax=1",
+    "t=0,ax=1,ay=2,az=3,gx=4,gy=5,gz=6,wz=7",
   };
-  Options o;
+  namespace gap = periodic_bias_compensation::gap;
+  gap::CsvOptions o;
   o.columns = kColumns[in.byte() % (sizeof kColumns / sizeof kColumns[0])];
   o.skip_lines = in.byte() % 3;
   o.rate = in.flag() ? 100.0 : 0.0;
-  o.real_csv = path;
+  o.path = path;
   {
     std::ofstream file(path, std::ios::binary | std::ios::trunc);
     const std::string text = in.rest();
@@ -40,7 +42,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   }
   try
   {
-    const gap::Recording r = readCsv(o);
+    const gap::Recording r = gap::readCsv(o);
     if (static_cast<std::size_t>(r.data.rows()) != r.stamp.size() || r.data.cols() != 6)
     {
       pbc_fuzz::fail("readCsv: data and stamps differ in size");
