@@ -1,11 +1,13 @@
 # ROS wrapper, nodelet, node, offline bag tools and rostests.
 include_directories(include ${catkin_INCLUDE_DIRS})
 
-# Wrapper library: message conversions, parameters, the CompensatorRos class, the bag writer.
+# Wrapper library: message conversions, parameters, the IMU mounting, the CompensatorRos class,
+# the bag writer.
 add_library(${PROJECT_NAME}_ros
   src/ros/conversions.cpp
   src/ros/parameters.cpp
   src/ros/raw_integrator.cpp
+  src/ros/mounting.cpp
   src/ros/compensator_ros.cpp
   src/ros/bag_writer.cpp)
 # roslz4 and bz2: BagWriter compresses chunks itself (not exported by rosbag_storage).

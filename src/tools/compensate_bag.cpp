@@ -1,6 +1,7 @@
 // compensate_bag: runs the compensator over a bag at full speed, without a ROS master, and writes
 // the same outputs as the node (odometry/filtered, odometry/wave, bias_state) to a new bag,
-// copying ground_truth/* through (as their bytes, not deserialised).
+// copying ground_truth/* through (as their bytes, not deserialised). The IMU's mounting comes
+// from the bag's /tf_static or /tf, looked up as the node does (ros/mounting.h).
 //
 //   compensate_bag --in IN.bag --out OUT.bag [--mode paper|default] [--params FILE.yaml]
 //                  [--imu-topic imu/data] [--outputs filtered,wave,bias,ground_truth]
@@ -31,6 +32,8 @@
 #include <rosbag/bag.h>
 #include <rosbag/exceptions.h>
 #include <rosbag/view.h>
+#include <tf2/buffer_core.h>
+#include <tf2_msgs/TFMessage.h>
 #include <unistd.h>
 
 #include "periodic_bias_compensation/core/calibration_file.h"
@@ -38,6 +41,7 @@
 #include "periodic_bias_compensation/core/gain_tuning.h"
 #include "periodic_bias_compensation/ros/bag_writer.h"
 #include "periodic_bias_compensation/ros/conversions.h"
+#include "periodic_bias_compensation/ros/mounting.h"
 #include "periodic_bias_compensation/ros/parameters.h"
 #include "periodic_bias_compensation/tools/command_line.h"
 
@@ -52,7 +56,8 @@ const char* const kUsage =
     "                      [--outputs filtered,wave,bias,ground_truth] [--compression none|lz4|bz2]\n"
     "Runs the bias compensator over IN.bag and writes odometry/filtered, odometry/wave and\n"
     "bias_state (plus ground_truth/* copied through) to OUT.bag. --params takes a YAML file with\n"
-    "the keys of config/compensator.yaml; --mode overrides its 'mode'.\n"
+    "the keys of config/compensator.yaml; --mode overrides its 'mode'. The IMU's mounting on\n"
+    "base_frame is looked up in IN.bag's /tf_static (then /tf), as the node looks it up in tf2.\n"
     "--outputs: which of them to write, comma-separated (default: all four).\n"
     "--compression: of OUT.bag's chunks (default: none, the fastest; lz4 writes about a fifth of\n"
     "the bytes, bz2 the fewest and is the slowest).\n"
@@ -640,6 +645,8 @@ public:
                                " (topics: " + (list.empty() ? "none" : list) + ")");
     }
 
+    resolveMounting(in, imu_topic);
+
     // What each connection of IN is to this tool: only those used are read. A message finds its
     // connection by its connection header (the same object for all messages of a connection).
     std::vector<InputConnection> connections;
@@ -785,6 +792,85 @@ private:
     std::optional<std::uint32_t> copy;    ///< OUT's connection, for kCopy
   };
 
+  /// The messages of `topic` in IN (with or without its leading '/') up to bag time `until`.
+  static rosbag::View topicView(const rosbag::Bag& in, const std::string& topic, const ros::Time& until = ros::TIME_MAX)
+  {
+    return rosbag::View(
+        in, [topic](const rosbag::ConnectionInfo* c) { return absoluteTopic(c->topic) == topic; }, ros::TIME_MIN,
+        until);
+  }
+
+  /// Adds the transforms of IN's `topic` (tf2_msgs/TFMessage) up to bag time `until` to *tf.
+  /// @return how many were added
+  static int addTransforms(const rosbag::Bag& in, const std::string& topic, const ros::Time& until, tf2::BufferCore* tf)
+  {
+    int added = 0;
+    for (const rosbag::MessageInstance& m : topicView(in, topic, until))
+    {
+      const tf2_msgs::TFMessage::ConstPtr message = m.instantiate<tf2_msgs::TFMessage>();
+      if (!message)
+      {
+        std::fprintf(stderr, "compensate_bag: %s holds %s, not tf2_msgs/TFMessage: not used for the mounting\n",
+                     topic.c_str(), m.getDataType().c_str());
+        return added;
+      }
+      for (const geometry_msgs::TransformStamped& transform : message->transforms)
+      {
+        added += tf->setTransform(transform, "bag " + topic, topic == "/tf_static") ? 1 : 0;
+      }
+    }
+    return added;
+  }
+
+  /// The IMU's mounting, decided once before the messages are processed, as the node does on its
+  /// first message (lookupMounting) from the bag's /tf_static and, failing that, its /tf up to
+  /// mount_timeout after the first IMU message. Nothing is dropped meanwhile: the bag holds
+  /// them all already. Said on stderr.
+  void resolveMounting(const rosbag::Bag& in, const std::string& imu_topic)
+  {
+    rosbag::View imu = topicView(in, imu_topic);
+    const auto first = imu.begin();
+    const sensor_msgs::Imu::ConstPtr message = first == imu.end() ? nullptr : first->instantiate<sensor_msgs::Imu>();
+    if (!message)
+    {
+      return;  // no message, or not sensor_msgs/Imu: the main loop says so
+    }
+    const std::string frame = params_.ros.imu_frame.empty() ? message->header.frame_id : params_.ros.imu_frame;
+    const std::string& base = params_.ros.base_frame;
+    tf2::BufferCore tf;
+    MountingLookup lookup = lookupMounting(tf, frame, params_.ros);
+    std::string source = "/tf_static";
+    int transforms = 0;
+    if (lookup.source == MountingSource::kMissing)
+    {
+      transforms += addTransforms(in, source, ros::TIME_MAX, &tf);
+      lookup = lookupMounting(tf, frame, params_.ros);
+    }
+    if (lookup.source == MountingSource::kMissing)
+    {
+      source = "/tf";
+      transforms += addTransforms(in, source, first->getTime() + ros::Duration(params_.ros.mount_timeout), &tf);
+      lookup = lookupMounting(tf, frame, params_.ros);
+    }
+    mounting_ = lookup.mounting;
+    switch (lookup.source)
+    {
+      case MountingSource::kNotNeeded:
+        std::fprintf(stderr, "compensate_bag: mounting: %s\n",
+                     frame == base ? ("the IMU's frame is " + base + ": none needed").c_str() :
+                                     ("identity_mounting: " + frame + " taken as aligned with " + base).c_str());
+        break;
+      case MountingSource::kTransform:
+        std::fprintf(stderr, "compensate_bag: mounting: %s -> %s from %s, %s\n", frame.c_str(), base.c_str(),
+                     source.c_str(), describeMounting(mounting_).c_str());
+        break;
+      case MountingSource::kMissing:
+        std::fprintf(stderr, "compensate_bag: no %s -> %s transform in the bag: taken as aligned%s\n", frame.c_str(),
+                     base.c_str(), transforms > 0 ? (" (tf2: " + lookup.why + ")").c_str() : "");
+        break;
+    }
+  }
+
   static void reportProgress(double done, double span)
   {
     std::fprintf(stderr, "compensate_bag: %3.0f%% (%.1f of %.1f s)\n", 100.0 * done / span, done, span);
@@ -809,11 +895,6 @@ private:
     {
       ++wrong_frame_;
       return;
-    }
-    if (received_ == 1 && imu.header.frame_id != params_.ros.base_frame)
-    {
-      std::fprintf(stderr, "compensate_bag: no mounting transform offline: %s is taken as aligned with %s\n",
-                   imu.header.frame_id.c_str(), params_.ros.base_frame.c_str());
     }
     const ImuSample sample = toImuSample(imu, mounting_);
     if (!plausible(sample))

@@ -1,6 +1,7 @@
 // compensate_bag end to end, without a master: runs the installed-style binary on the simulated
 // paper bench bag and reads the bag it writes; --outputs and --compression (topics written, chunk
-// compression, identical message bytes, readable by rosbag's Python reader too); then the error
+// compression, identical message bytes, readable by rosbag's Python reader too); the IMU's
+// mounting from the bag's /tf_static (an IMU yawed 90 deg gives the same outputs); then the error
 // paths (missing input, --out equal to --in, bad parameter files, missing topic, unknown output
 // or compression): non-zero exit, a message naming the problem, and no output file.
 #include <sys/stat.h>
@@ -10,7 +11,9 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <functional>
 #include <iterator>
+#include <limits>
 #include <map>
 #include <string>
 #include <vector>
@@ -20,6 +23,8 @@
 #include <rosbag/bag.h>
 #include <rosbag/view.h>
 #include <sensor_msgs/Imu.h>
+#include <tf2/LinearMath/Quaternion.h>
+#include <tf2_msgs/TFMessage.h>
 
 #include "periodic_bias_compensation/BiasState.h"
 #include "../common/shell.h"
@@ -88,6 +93,119 @@ Contents readContents(const std::string& path)
     contents[topic].emplace_back(m.getTime().toNSec(), std::move(bytes));
   }
   return contents;
+}
+
+/// Writes the IMU messages of `source` (its first `seconds`) to `path`, each changed by `change`,
+/// after `tf_static` on /tf_static when it holds transforms.
+void copyImu(const std::string& source, const std::string& path, const std::function<void(sensor_msgs::Imu*)>& change,
+             const tf2_msgs::TFMessage& tf_static = {}, double seconds = std::numeric_limits<double>::infinity())
+{
+  rosbag::Bag in(source, rosbag::bagmode::Read);
+  rosbag::View imu(in, rosbag::TopicQuery(std::vector<std::string>{ "imu/data", "/imu/data" }));
+  rosbag::Bag out(path, rosbag::bagmode::Write);
+  if (!tf_static.transforms.empty())
+  {
+    out.write("/tf_static", imu.getBeginTime(), tf_static);
+  }
+  for (const rosbag::MessageInstance& m : imu)
+  {
+    if ((m.getTime() - imu.getBeginTime()).toSec() > seconds)
+    {
+      break;
+    }
+    sensor_msgs::Imu message = *m.instantiate<sensor_msgs::Imu>();
+    change(&message);
+    out.write(m.getTopic(), m.getTime(), message);
+  }
+}
+
+/// Pose of every odometry message of a bag by topic (leading '/' removed) and stamp [ns].
+struct Pose
+{
+  std::array<double, 3> position;
+  tf2::Quaternion orientation;
+};
+std::map<std::string, std::map<std::uint64_t, Pose>> readPoses(const std::string& path)
+{
+  std::map<std::string, std::map<std::uint64_t, Pose>> poses;
+  rosbag::Bag bag(path, rosbag::bagmode::Read);
+  for (const rosbag::MessageInstance& m : rosbag::View(bag))
+  {
+    if (const auto odom = m.instantiate<nav_msgs::Odometry>())
+    {
+      const auto& p = odom->pose.pose.position;
+      const auto& q = odom->pose.pose.orientation;
+      poses[m.getTopic().substr(m.getTopic().front() == '/' ? 1 : 0)][odom->header.stamp.toNSec()] =
+          Pose{ { p.x, p.y, p.z }, tf2::Quaternion(q.x, q.y, q.z, q.w) };
+    }
+  }
+  return poses;
+}
+
+/// Largest position difference [m] and rotation between the orientations [rad] of `topic` in
+/// two bags (infinite when their stamps differ).
+std::pair<double, double> largestDifference(const std::string& a, const std::string& b, const std::string& topic)
+{
+  const auto pa = readPoses(a)[topic], pb = readPoses(b)[topic];
+  double position = 0.0, angle = 0.0;
+  if (pa.empty() || pa.size() != pb.size())
+  {
+    return { INFINITY, INFINITY };
+  }
+  for (const auto& [stamp, pose] : pa)
+  {
+    const auto other = pb.find(stamp);
+    if (other == pb.end())
+    {
+      return { INFINITY, INFINITY };
+    }
+    const auto& p = pose.position;
+    const auto& q = other->second.position;
+    position = std::max(position, std::hypot(p[0] - q[0], p[1] - q[1], p[2] - q[2]));
+    angle = std::max(angle, 2.0 * std::acos(std::min(1.0, std::abs(pose.orientation.dot(other->second.orientation)))));
+  }
+  return { position, angle };
+}
+
+/// The bench bag's IMU as if mounted yawed by 90 deg about base_link's z: its frame imu_yawed,
+/// whose axes are base_link's turned by +90 deg; with that transform on /tf_static if asked.
+std::string yawedImuBag(const std::string& path, bool with_tf_static)
+{
+  tf2::Quaternion base_from_imu;
+  base_from_imu.setRPY(0.0, 0.0, M_PI / 2);
+  tf2_msgs::TFMessage tf_static;
+  if (with_tf_static)
+  {
+    geometry_msgs::TransformStamped t;
+    t.header.frame_id = "base_link";
+    t.child_frame_id = "imu_yawed";
+    t.transform.rotation.x = base_from_imu.x();
+    t.transform.rotation.y = base_from_imu.y();
+    t.transform.rotation.z = base_from_imu.z();
+    t.transform.rotation.w = base_from_imu.w();
+    tf_static.transforms.push_back(t);
+  }
+  const auto toImu = [&base_from_imu](geometry_msgs::Vector3* v) {
+    const tf2::Vector3 r = tf2::quatRotate(base_from_imu.inverse(), tf2::Vector3(v->x, v->y, v->z));
+    v->x = r.x();
+    v->y = r.y();
+    v->z = r.z();
+  };
+  copyImu(PBC_BENCH_BAG, path,
+          [&](sensor_msgs::Imu* m) {
+            m->header.frame_id = "imu_yawed";
+            toImu(&m->linear_acceleration);
+            toImu(&m->angular_velocity);
+            auto& q = m->orientation;
+            const tf2::Quaternion level_from_imu =
+                tf2::Quaternion(q.x, q.y, q.z, q.w) * base_from_imu;  // level <- base <- imu
+            q.x = level_from_imu.x();
+            q.y = level_from_imu.y();
+            q.z = level_from_imu.z();
+            q.w = level_from_imu.w();
+          },
+          tf_static);
+  return path;
 }
 
 /// The compression named in each chunk header of a bag file ("compression=NAME" fields).
@@ -298,6 +416,55 @@ TEST_F(CompensateBag, TuneGainsRefusesToOverwriteTheOutput)
   EXPECT_EQ(r.status, 1);
   EXPECT_NE(r.output.find("--tune-gains must differ"), std::string::npos) << r.output;
   expectNothingWritten(out);
+}
+
+TEST_F(CompensateBag, MountingFromTfStaticGivesTheAlignedOutputs)
+{
+  // The bench bag's IMU is in imu_link, aligned with base_link (no transform in the bag).
+  const std::string aligned = dir_ + "/aligned.bag";
+  CommandResult r = run(std::string("--in ") + PBC_BENCH_BAG + " --out " + aligned);
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("no imu_link -> base_link transform in the bag: taken as aligned"), std::string::npos)
+      << r.output;
+
+  const std::string yawed = yawedImuBag(dir_ + "/yawed.bag", true);
+  const std::string compensated = dir_ + "/yawed_out.bag";
+  r = run("--in " + yawed + " --out " + compensated);
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("mounting: imu_yawed -> base_link from /tf_static, rpy 0 0 1.571 rad"), std::string::npos)
+      << r.output;
+  for (const char* topic : { "odometry/filtered", "odometry/wave" })
+  {
+    const auto [position, angle] = largestDifference(aligned, compensated, topic);
+    std::printf("[compensate_bag] IMU yawed 90 deg with /tf_static: %s differs by up to %.2e m, %.2e rad\n", topic,
+                position, angle);
+    EXPECT_LT(position, 1e-3) << topic;
+    EXPECT_LT(angle, 0.01) << topic;
+  }
+}
+
+TEST_F(CompensateBag, MountingWithoutTransformOrWithIdentityMountingIsAligned)
+{
+  const std::string aligned = dir_ + "/aligned.bag";
+  CommandResult r = run(std::string("--in ") + PBC_BENCH_BAG + " --out " + aligned + " --outputs filtered");
+  ASSERT_EQ(r.status, 0) << r.output;
+
+  // The same yawed IMU without /tf_static: taken as aligned, so its outputs are turned.
+  const std::string untold = yawedImuBag(dir_ + "/untold.bag", false);
+  r = run("--in " + untold + " --out " + dir_ + "/untold_out.bag --outputs filtered");
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("no imu_yawed -> base_link transform in the bag: taken as aligned"), std::string::npos)
+      << r.output;
+  EXPECT_GT(largestDifference(aligned, dir_ + "/untold_out.bag", "odometry/filtered").second, 1.0);
+
+  // identity_mounting: true skips the lookup, also with the transform in the bag.
+  const std::string told = yawedImuBag(dir_ + "/told.bag", true);
+  r = run("--in " + told + " --out " + dir_ + "/told_out.bag --outputs filtered --params " +
+          writeFile("identity.yaml", "identity_mounting: true\n"));
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("mounting: identity_mounting: imu_yawed taken as aligned with base_link"), std::string::npos)
+      << r.output;
+  EXPECT_GT(largestDifference(aligned, dir_ + "/told_out.bag", "odometry/filtered").second, 1.0);
 }
 
 TEST_F(CompensateBag, MissingInputFails)
