@@ -23,7 +23,7 @@ target_link_libraries(compensator_node ${PROJECT_NAME}_ros ${catkin_LIBRARIES})
 # Offline: the same core and conversions over a bag, no master.
 add_executable(compensate_bag src/tools/compensate_bag.cpp)
 # roslz4 and bz2: its pre-check decompresses chunks as rosbag will (not exported by rosbag_storage).
-target_link_libraries(compensate_bag ${PROJECT_NAME}_ros ${catkin_LIBRARIES} roslz4 bz2)
+target_link_libraries(compensate_bag ${PROJECT_NAME}_ros ${PROJECT_NAME}_tools ${catkin_LIBRARIES} roslz4 bz2)
 
 if(CATKIN_ENABLE_TESTING)
   find_package(rostest REQUIRED)

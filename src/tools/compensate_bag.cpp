@@ -7,9 +7,9 @@
 //                  [--imu-topic imu/data] [--outputs filtered,wave,bias,ground_truth]
 //                  [--compression none|lz4|bz2]
 //
-// The output is written to a temporary file next to OUT and renamed when complete, so a failure
-// never leaves a partial OUT behind; IN is never overwritten. Exit status: 0 success, 1 error,
-// 2 wrong command line.
+// The outputs are written to temporary files next to them and renamed when complete, so a
+// failure or a signal never leaves a partial OUT behind; an input is never overwritten
+// (tools/output_file.h). Exit status: 0 success, 1 error, 2 wrong command line.
 #include <algorithm>
 #include <chrono>
 #include <cinttypes>
@@ -34,7 +34,6 @@
 #include <rosbag/view.h>
 #include <tf2/buffer_core.h>
 #include <tf2_msgs/TFMessage.h>
-#include <unistd.h>
 
 #include "periodic_bias_compensation/core/calibration_file.h"
 #include "periodic_bias_compensation/core/compensator.h"
@@ -44,6 +43,7 @@
 #include "periodic_bias_compensation/ros/mounting.h"
 #include "periodic_bias_compensation/ros/parameters.h"
 #include "periodic_bias_compensation/tools/command_line.h"
+#include "periodic_bias_compensation/tools/output_file.h"
 
 namespace fs = std::filesystem;
 using namespace periodic_bias_compensation;
@@ -146,6 +146,8 @@ std::optional<Options> parseArguments(int argc, char** argv)
   {
     throw UsageError("--in and --out are required");
   }
+  refuseOverwritingInputs({ { "--in", options.in }, { "--params", options.params } },
+                          { { "--out", options.out }, { "--tune-gains", options.tune_gains } });
   return options;
 }
 
@@ -589,8 +591,9 @@ public:
     }
   }
 
-  /// Runs over the input; a truncated or corrupt input (rosbag::BagException, a message that
-  /// does not deserialise) becomes one std::runtime_error that says so and what to do.
+  /// Runs over the input, writing OUT to `temp_path`; a truncated or corrupt input
+  /// (rosbag::BagException, a message that does not deserialise) becomes one std::runtime_error
+  /// that says so and what to do.
   void run(const std::string& temp_path)
   {
     try
@@ -717,9 +720,9 @@ public:
     reportProgress(span, span);
   }
 
-  /// --tune-gains: paper mode's gains tuned on the samples of this bag (tunePaperGains), written
-  /// as parameters to options_.tune_gains. Nothing is written on error.
-  void tuneGains() const
+  /// --tune-gains: paper mode's gains tuned on the samples of this bag (tunePaperGains), as the
+  /// parameter file to write (YAML).
+  std::string tuneGains() const
   {
     if (tuning_samples_.size() < 2)
     {
@@ -750,18 +753,8 @@ public:
                   "[m, x y z]: %.4f %.4f %.4f with the gains given, %.4f %.4f %.4f with these",
                   options_.in.c_str(), settle, tuning.score_start[0], tuning.score_start[1], tuning.score_start[2],
                   tuning.score[0], tuning.score[1], tuning.score[2]);
-    const std::string temp = options_.tune_gains + ".partial-" + std::to_string(::getpid());
-    {
-      std::ofstream file(temp);
-      file << gainsToYaml(tuning.gains, summary) << "mode: paper\n";
-      if (!file.flush())
-      {
-        fs::remove(temp);
-        throw std::runtime_error("cannot write " + options_.tune_gains);
-      }
-    }
-    fs::rename(temp, options_.tune_gains);
-    std::fprintf(stderr, "compensate_bag: %s\ncompensate_bag: wrote %s\n", summary, options_.tune_gains.c_str());
+    std::fprintf(stderr, "compensate_bag: %s\n", summary);
+    return gainsToYaml(tuning.gains, summary) + "mode: paper\n";
   }
 
   void printSummary() const
@@ -966,29 +959,13 @@ private:
   std::optional<std::uint32_t> filtered_connection_, wave_connection_, bias_connection_;  ///< in OUT
 };
 
-/// Checks the input exists and that OUT cannot clobber it.
-void checkPaths(const Options& options)
+/// Checks the input exists (the outputs were checked with the command line).
+void checkInput(const Options& options)
 {
   std::error_code ec;
   if (!fs::is_regular_file(options.in, ec))
   {
     throw std::runtime_error("input bag '" + options.in + "' does not exist or is not a file");
-  }
-  const fs::path in = fs::weakly_canonical(options.in, ec);
-  const fs::path out = fs::weakly_canonical(options.out, ec);
-  if (in == out || (fs::exists(options.out, ec) && fs::equivalent(options.in, options.out, ec)))
-  {
-    throw std::runtime_error("--out must differ from --in ('" + options.in + "' would be overwritten)");
-  }
-  if (!options.tune_gains.empty() &&
-      (fs::weakly_canonical(options.tune_gains, ec) == in || fs::weakly_canonical(options.tune_gains, ec) == out))
-  {
-    throw std::runtime_error("--tune-gains must differ from --in and --out");
-  }
-  const fs::path dir = out.parent_path();
-  if (!dir.empty() && !fs::is_directory(dir, ec))
-  {
-    throw std::runtime_error("output directory '" + dir.string() + "' does not exist");
   }
 }
 }  // namespace
@@ -998,26 +975,33 @@ void checkPaths(const Options& options)
 int compensateBagMain(int argc, char** argv)
 {
   Options options;
-  std::string temp_path;
   try
   {
     const std::optional<Options> parsed = parseArguments(argc, argv);
     if (!parsed)
       return 0;
     options = *parsed;
-    checkPaths(options);
+    checkInput(options);
     const Parameters params = loadParameters(options);
-    BagCompensator compensator(options, params);
-    temp_path = options.out + ".partial-" + std::to_string(::getpid());
-    compensator.run(temp_path);
+    // Both outputs are created (as temporaries) before the bag is read: one that cannot be
+    // written is said at once.
+    OutputFile out(options.out);
+    std::optional<OutputFile> gains;
     if (!options.tune_gains.empty())
     {
-      compensator.tuneGains();
+      gains.emplace(options.tune_gains);
     }
-    fs::rename(temp_path, options.out);
-    temp_path.clear();
+    BagCompensator compensator(options, params);
+    compensator.run(out.temporary());
+    const std::string tuned = gains ? compensator.tuneGains() : std::string();
+    out.commit();
     compensator.printSummary();
     std::fprintf(stderr, "compensate_bag: wrote %s\n", options.out.c_str());
+    if (gains)
+    {
+      gains->commit(tuned);
+      std::fprintf(stderr, "compensate_bag: wrote %s\n", options.tune_gains.c_str());
+    }
     return 0;
   }
   catch (const UsageError& e)
@@ -1028,11 +1012,6 @@ int compensateBagMain(int argc, char** argv)
   catch (const std::exception& e)
   {
     std::fprintf(stderr, "compensate_bag: error: %s\n", e.what());
-    if (!temp_path.empty())
-    {
-      std::error_code ec;
-      fs::remove(temp_path, ec);
-    }
     return 1;
   }
 }

@@ -16,7 +16,8 @@
 // COL is a column name of the CSV header or a 0-based index, optionally prefixed with '-' to
 // negate it; without a t column the time is k / rate. Scales convert to SI (e.g. --accel-scale
 // 9.80665 for g, --gyro-scale 0.0174532925 for deg/s). Writes DIR/report.json, DIR/report.md,
-// DIR/*.csv and (with python3-matplotlib) DIR/*.png; prints a one-screen summary.
+// DIR/*.csv and (with python3-matplotlib) DIR/*.png, each renamed into place when complete and
+// never over an input (tools/output_file.h); prints a one-screen summary.
 // Exit status: 0 done, 1 error, 2 wrong command line.
 #include <sys/stat.h>
 
@@ -41,6 +42,7 @@
 #include "periodic_bias_compensation/gap/gap.h"
 #include "periodic_bias_compensation/sim/scenario.h"
 #include "periodic_bias_compensation/tools/command_line.h"
+#include "periodic_bias_compensation/tools/output_file.h"
 
 namespace fs = std::filesystem;
 namespace gap = periodic_bias_compensation::gap;
@@ -56,6 +58,10 @@ const char* const kUsage =
     "         [--truth-smooth S] [--no-truth] [--truth-position-scale K] (CSV truth columns px,py,pz,qw,qx,qy,qz)\n";
 
 using periodic_bias_compensation::UsageError;
+
+/// The files diagnose_gap writes in --out (the plots aside).
+const char* const kReportFiles[] = { "report.json", "fitted_scenario.yaml", "psd.csv",  "allan.csv",
+                                     "drift.csv",   "features.csv",         "truth.csv", "report.md" };
 
 struct Options
 {
@@ -518,6 +524,13 @@ int main(int argc, char** argv)
     {
       throw UsageError("--fit-fraction must be in (0.1, 0.9)");
     }
+    std::vector<periodic_bias_compensation::NamedPath> outputs;
+    for (const char* name : kReportFiles)
+    {
+      outputs.push_back({ "--out", (fs::path(o.out) / name).string() });
+    }
+    periodic_bias_compensation::refuseOverwritingInputs(
+        { { "--real", o.real }, { "--real-csv", o.real_csv }, { "--sim", o.scenario } }, outputs);
   }
   catch (const std::exception& e)
   {
@@ -528,9 +541,13 @@ int main(int argc, char** argv)
   {
     const sim::Scenario scenario = sim::loadScenario(o.scenario);
     gap::Recording real = o.real.empty() ? readCsv(o) : readBag(o);
+    // Before the diagnosis: a directory that cannot be written is said at once.
+    periodic_bias_compensation::prepareOutputDirectory(o.out);
+    const auto write = [&o](const std::string& name, const std::string& contents) {
+      periodic_bias_compensation::writeOutputFile((fs::path(o.out) / name).string(), contents);
+    };
     normalise(&real, o.max_duration);
     const gap::Report rep = gap::diagnose(real, scenario, o.diag);
-    fs::create_directories(o.out);
     // Stepwise: add the named effect to the model and diagnose again, while an effect is named.
     struct Step
     {
@@ -577,15 +594,15 @@ int main(int argc, char** argv)
     std::string json = gap::reportJson(rep);
     const auto pos = json.rfind("  \"seconds\"");
     json.insert(pos, "  \"stepwise\": " + stepwise.str() + ",\n");
-    std::ofstream(o.out + "/report.json") << json;
-    std::ofstream(o.out + "/fitted_scenario.yaml") << sim::toYaml(model);
-    std::ofstream(o.out + "/psd.csv") << rep.psd_csv;
-    std::ofstream(o.out + "/allan.csv") << rep.allan_csv;
-    std::ofstream(o.out + "/drift.csv") << rep.drift_csv;
-    std::ofstream(o.out + "/features.csv") << rep.features_csv;
+    write("report.json", json);
+    write("fitted_scenario.yaml", sim::toYaml(model));
+    write("psd.csv", rep.psd_csv);
+    write("allan.csv", rep.allan_csv);
+    write("drift.csv", rep.drift_csv);
+    write("features.csv", rep.features_csv);
     if (rep.has_truth)
     {
-      std::ofstream(o.out + "/truth.csv") << rep.truth_csv;
+      write("truth.csv", rep.truth_csv);
     }
     bool plots = false;
     if (o.plots)
@@ -618,7 +635,7 @@ int main(int argc, char** argv)
     }
     sm << "\nThe model with every named effect: `fitted_scenario.yaml`.\n";
     md.insert(md.find("\nMethod and limits"), sm.str());
-    std::ofstream(o.out + "/report.md") << md;
+    write("report.md", md);
     std::cout << gap::reportSummary(rep) << so.str() << "\nreport: " << o.out << "/report.md, " << o.out
               << "/report.json, " << o.out << "/fitted_scenario.yaml\n";
   }
