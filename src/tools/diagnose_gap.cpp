@@ -33,13 +33,16 @@
 #include <string>
 #include <vector>
 
+#include <ros/exception.h>
 #include <rosbag/bag.h>
+#include <rosbag/exceptions.h>
 #include <rosbag/view.h>
 #include <nav_msgs/Odometry.h>
 #include <sensor_msgs/Imu.h>
 #include <sensor_msgs/Temperature.h>
 
 #include "periodic_bias_compensation/gap/gap.h"
+#include "periodic_bias_compensation/ros/bag_check.h"
 #include "periodic_bias_compensation/sim/scenario.h"
 #include "periodic_bias_compensation/tools/command_line.h"
 #include "periodic_bias_compensation/tools/output_file.h"
@@ -84,7 +87,7 @@ std::string absoluteTopic(const std::string& t)
   return (!t.empty() && t.front() == '/') ? t : "/" + t;
 }
 
-gap::Recording readBag(const Options& o)
+gap::Recording readBagUnchecked(const Options& o)
 {
   rosbag::Bag bag(o.real, rosbag::bagmode::Read);
   gap::Recording r;
@@ -173,6 +176,29 @@ gap::Recording readBag(const Options& o)
     }
   }
   return r;
+}
+
+/// The recording of --real; a bag that is missing, empty, cut off or corrupt is a
+/// std::runtime_error that names it (ros/bag_check.h), never rosbag's text alone.
+gap::Recording readBag(const Options& o)
+{
+  const std::string problem = periodic_bias_compensation::bagFileProblem(o.real);
+  if (!problem.empty())
+  {
+    throw std::runtime_error(problem);
+  }
+  try
+  {
+    return readBagUnchecked(o);
+  }
+  catch (const rosbag::BagException& e)
+  {
+    throw std::runtime_error(periodic_bias_compensation::corruptBagMessage(o.real, e.what()));
+  }
+  catch (const ros::Exception& e)
+  {
+    throw std::runtime_error(periodic_bias_compensation::corruptBagMessage(o.real, e.what()));
+  }
 }
 
 std::vector<std::string> split(const std::string& s, char sep)
@@ -524,6 +550,10 @@ int main(int argc, char** argv)
     {
       throw UsageError("--fit-fraction must be in (0.1, 0.9)");
     }
+    periodic_bias_compensation::requireAtLeast("--ensemble", o.diag.ensemble, 1);
+    periodic_bias_compensation::requireAtLeast("--threads", o.diag.threads, 1);
+    periodic_bias_compensation::requireAtLeast("--steps", o.steps, 0);
+    periodic_bias_compensation::requireAtLeast("--skip-lines", o.skip_lines, 0);
     std::vector<periodic_bias_compensation::NamedPath> outputs;
     for (const char* name : kReportFiles)
     {
