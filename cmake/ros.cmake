@@ -76,12 +76,14 @@ if(CATKIN_ENABLE_TESTING)
   target_link_libraries(test_ros_conversions ${PROJECT_NAME}_ros ${catkin_LIBRARIES})
   target_compile_definitions(test_ros_conversions PRIVATE PBC_SOURCE_DIR="${CMAKE_CURRENT_SOURCE_DIR}")
 
-  # compensate_bag end to end on the bench bag and its error paths (no master).
+  # compensate_bag end to end on the bench bag, the batch runs of docs/batch.md, and its error
+  # paths (no master).
   catkin_add_gtest(test_compensate_bag test/ros/compensate_bag_test.cpp)
   target_link_libraries(test_compensate_bag ${catkin_LIBRARIES})
   target_compile_definitions(test_compensate_bag PRIVATE
     PBC_COMPENSATE_BAG="$<TARGET_FILE:compensate_bag>"
     PBC_BENCH_BAG="${PBC_BENCH_BAG}"
+    PBC_CATKIN_DEVEL="${CATKIN_DEVEL_PREFIX}"
     PBC_SOURCE_DIR="${CMAKE_CURRENT_SOURCE_DIR}")
   add_dependencies(test_compensate_bag compensate_bag ${PROJECT_NAME}_test_bags
     ${PROJECT_NAME}_generate_messages_cpp)

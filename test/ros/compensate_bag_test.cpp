@@ -1,8 +1,8 @@
 // compensate_bag end to end, without a master: runs the installed-style binary on the simulated
 // paper bench bag and reads the bag it writes; --outputs and --compression (topics written, chunk
 // compression, identical message bytes, readable by rosbag's Python reader too); the IMU's
-// mounting from the bag's /tf_static (an IMU yawed 90 deg gives the same outputs); then the error
-// paths (missing input, --out equal to --in, bad parameter files, missing topic, unknown output
+// mounting from the bag's /tf_static (an IMU yawed 90 deg gives the same outputs); the batch
+// one-liner of docs/batch.md and its Slurm script over a folder of bags; then the error paths (missing input, --out equal to --in, bad parameter files, missing topic, unknown output
 // or compression): non-zero exit, a message naming the problem, and no output file.
 #include <sys/stat.h>
 
@@ -465,6 +465,72 @@ TEST_F(CompensateBag, MountingWithoutTransformOrWithIdentityMountingIsAligned)
   EXPECT_NE(r.output.find("mounting: identity_mounting: imu_yawed taken as aligned with base_link"), std::string::npos)
       << r.output;
   EXPECT_GT(largestDifference(aligned, dir_ + "/told_out.bag", "odometry/filtered").second, 1.0);
+}
+
+/// The line of docs/batch.md's code blocks that runs `tool` through GNU parallel ("" if none).
+std::string documentedParallelLine(const std::string& tool)
+{
+  std::ifstream doc(std::string(PBC_SOURCE_DIR) + "/docs/batch.md");
+  for (std::string line; std::getline(doc, line);)
+  {
+    if (line.rfind("    ", 0) == 0 && line.find(" parallel ") != std::string::npos &&
+        line.find(" " + tool + " ") != std::string::npos)
+    {
+      return line.substr(4);
+    }
+  }
+  return "";
+}
+
+TEST_F(CompensateBag, DocumentedBatchRunsOverAFolderOfBags)
+{
+  if (shell("command -v parallel").status != 0)
+  {
+    GTEST_SKIP() << "GNU parallel is not installed (Debian package parallel, scripts/setup): the one-liner of "
+                    "docs/batch.md is not run";
+  }
+  std::string line = documentedParallelLine("compensate_bag");
+  ASSERT_FALSE(line.empty()) << "no parallel ... compensate_bag line in docs/batch.md";
+  // The tool built here (rosrun finds the same one when the workspace is sourced).
+  const std::string rosrun = "rosrun periodic_bias_compensation compensate_bag";
+  ASSERT_NE(line.find(rosrun), std::string::npos) << line;
+  line.replace(line.find(rosrun), rosrun.size(), PBC_COMPENSATE_BAG);
+  const auto keep = [](sensor_msgs::Imu*) {};
+  ASSERT_EQ(std::system(("mkdir -p " + dir_ + "/bags " + dir_ + "/mixed").c_str()), 0);
+  copyImu(PBC_BENCH_BAG, dir_ + "/bags/first.bag", keep, {}, 10.0);
+  copyImu(PBC_BENCH_BAG, dir_ + "/bags/second.bag", keep, {}, 10.0);
+  CommandResult r = shell("cd " + dir_ + "/bags && " + line);
+  EXPECT_EQ(r.status, 0) << line << "\n" << r.output;
+  EXPECT_TRUE(exists(dir_ + "/bags/compensated/first.bag")) << r.output;
+  EXPECT_TRUE(exists(dir_ + "/bags/compensated/second.bag")) << r.output;
+
+  // A broken bag among them: parallel's status counts the failed job, the joblog has its status 1.
+  copyImu(PBC_BENCH_BAG, dir_ + "/mixed/good.bag", keep, {}, 10.0);
+  writeFile("mixed/broken.bag", "#ROSBAG V2.0\n");
+  r = shell("cd " + dir_ + "/mixed && " + line);
+  EXPECT_EQ(r.status, 1) << r.output;
+  EXPECT_TRUE(exists(dir_ + "/mixed/compensated/good.bag"));
+  EXPECT_FALSE(exists(dir_ + "/mixed/compensated/broken.bag"));
+  const CommandResult exitvals = shell("cut -f7,9 " + dir_ + "/mixed/compensated/joblog.tsv | sort");
+  EXPECT_NE(exitvals.output.find("1\t" + std::string(PBC_COMPENSATE_BAG) + " --in broken.bag"), std::string::npos)
+      << exitvals.output;
+
+  // The Slurm array script, run as task 1 would be (the second bag in file-name order).
+  const std::string setup = std::string(PBC_CATKIN_DEVEL) + "/setup.bash";
+  if (exists(setup))
+  {
+    const auto task = [&](int id) {
+      return shell("cd " + dir_ + "/bags && PBC_WS=" + PBC_CATKIN_DEVEL + "/.. SLURM_ARRAY_TASK_ID=" +
+                   std::to_string(id) + " bash " + PBC_SOURCE_DIR + "/scripts/slurm_compensate_bags slurm");
+    };
+    r = task(1);
+    EXPECT_EQ(r.status, 0) << r.output;
+    EXPECT_TRUE(exists(dir_ + "/bags/slurm/second.bag")) << r.output;
+    EXPECT_FALSE(exists(dir_ + "/bags/slurm/first.bag"));
+    r = task(2);
+    EXPECT_EQ(r.status, 2) << r.output;
+    EXPECT_NE(r.output.find("holds 2 bags"), std::string::npos) << r.output;
+  }
 }
 
 TEST_F(CompensateBag, MissingInputFails)
