@@ -152,14 +152,27 @@ bool sameFile(const std::string& a, const std::string& b)
 }
 }  // namespace
 
-OutputFile::OutputFile(std::string path)
-  : path_(std::move(path)), temporary_(path_ + ".partial-" + std::to_string(::getpid()))
+OutputFile::OutputFile(std::string path) : path_(std::move(path)), target_(path_)
 {
   std::error_code ec;
-  if (fs::is_directory(path_, ec))
+  const fs::file_status status = fs::status(path_, ec);
+  if (fs::is_directory(status))
   {
     throw std::runtime_error("cannot write output '" + path_ + "': it is a directory");
   }
+  if (fs::exists(status) && !fs::is_regular_file(status))
+  {
+    // A device or a pipe (/dev/stdout, /dev/null, a FIFO): written as it is, never replaced.
+    temporary_ = path_;
+    return;
+  }
+  if (fs::is_symlink(fs::symlink_status(path_, ec)))
+  {
+    // Through a symbolic link, as a plain write goes: the file it names is replaced, the link stays.
+    const fs::path resolved = fs::weakly_canonical(path_, ec);
+    target_ = ec ? path_ : resolved.string();
+  }
+  temporary_ = target_ + ".partial-" + std::to_string(::getpid());
   // Registered before it exists: a signal never leaves it behind.
   const fs::path absolute = fs::absolute(temporary_, ec);
   slot_ = registerTemporary(ec ? temporary_ : absolute.string());
@@ -183,11 +196,15 @@ OutputFile::~OutputFile()
 
 void OutputFile::commit()
 {
+  if (temporary_ == target_)
+  {
+    return;  // a device or a pipe, written directly
+  }
   if (slot_ < 0)
   {
     throw std::logic_error("OutputFile::commit: " + path_ + " committed already");
   }
-  const int error = ::rename(temporary_.c_str(), path_.c_str()) == 0 ? 0 : errno;
+  const int error = ::rename(temporary_.c_str(), target_.c_str()) == 0 ? 0 : errno;
   if (error != 0)
   {
     ::unlink(temporary_.c_str());

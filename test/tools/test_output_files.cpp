@@ -149,6 +149,13 @@ TEST_F(OutputFiles, CommitRenamesTheCompleteFile)
   EXPECT_EQ(readAll(path), "streamed");
   periodic_bias_compensation::writeOutputFile(path, "whole");
   EXPECT_EQ(readAll(path), "whole");
+
+  // Through a symbolic link: the file it names gets the contents, the link stays a link.
+  const std::string link = dir_ + "/link.txt";
+  ASSERT_EQ(::symlink(path.c_str(), link.c_str()), 0);
+  periodic_bias_compensation::writeOutputFile(link, "through the link");
+  EXPECT_TRUE(fs::is_symlink(link));
+  EXPECT_EQ(readAll(path), "through the link");
   EXPECT_TRUE(temporaries().empty());
 }
 
@@ -169,6 +176,28 @@ TEST_F(OutputFiles, WithoutCommitTheTemporaryGoesAndAnOldFileStays)
   EXPECT_FALSE(temporary.empty());
   EXPECT_FALSE(exists(temporary));
   EXPECT_EQ(readAll(path), "old");
+  EXPECT_TRUE(temporaries().empty());
+}
+
+TEST_F(OutputFiles, ADeviceIsWrittenAsItIs)
+{
+  {
+    OutputFile file("/dev/null");
+    EXPECT_EQ(file.temporary(), "/dev/null");
+    file.commit("discarded");
+  }
+  EXPECT_TRUE(fs::is_character_file("/dev/null"));
+  const CommandResult r = shell(std::string(PBC_SIMULATE_IMU) + " --scenario " + scenario_ +
+                                " --duration 1 --csv /dev/stdout 2>/dev/null | head -c 100000 | grep -c ^index,t,");
+  EXPECT_EQ(r.output, "1\n") << "no CSV on stdout";
+  // /dev/stdout sent to a file: the file gets the CSV, /dev/stdout stays what it was.
+  const bool stdout_was_link = fs::is_symlink("/dev/stdout");
+  const CommandResult redirected = shell(std::string(PBC_SIMULATE_IMU) + " --scenario " + scenario_ +
+                                         " --duration 1 --csv /dev/stdout > " + dir_ + "/stdout.csv");
+  EXPECT_EQ(redirected.status, 0) << redirected.output;
+  EXPECT_EQ(readAll(dir_ + "/stdout.csv").rfind("index,t,", 0), 0u);
+  EXPECT_EQ(fs::is_symlink("/dev/stdout"), stdout_was_link);
+  EXPECT_TRUE(fs::is_character_file("/dev/null"));
   EXPECT_TRUE(temporaries().empty());
 }
 

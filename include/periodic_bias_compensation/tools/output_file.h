@@ -22,7 +22,9 @@ class OutputFile
 public:
   /// Creates the (empty) temporary file next to `path`. Throws std::runtime_error "cannot
   /// write output 'PATH': why" when it cannot (directory missing or not writable, PATH a
-  /// directory).
+  /// directory). A `path` that is a device or a pipe (/dev/stdout) is written directly:
+  /// temporary() is `path` itself, and it is never removed or replaced. Through a symbolic
+  /// link, the file it names is written (the link stays).
   explicit OutputFile(std::string path);
   /// Removes the temporary unless commit() renamed it.
   ~OutputFile();
@@ -42,8 +44,9 @@ public:
 
 private:
   std::string path_;
-  std::string temporary_;
-  int slot_ = -1;  ///< registration for removal on a signal or at exit; -1 once committed
+  std::string target_;     ///< path_, or the file it names when it is a symbolic link
+  std::string temporary_;  ///< next to target_; target_ itself for a device or a pipe
+  int slot_ = -1;  ///< registration for removal on a signal or at exit; -1 when none
 };
 
 /// Writes `contents` to `path` through an OutputFile.
