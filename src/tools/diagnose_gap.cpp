@@ -20,9 +20,11 @@
 // never over an input (tools/output_file.h); prints a one-screen summary.
 // Exit status: 0 done, 1 error, 2 wrong command line.
 #include <sys/stat.h>
+#include <sys/wait.h>
 
 #include <algorithm>
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -426,6 +428,22 @@ void normalise(gap::Recording* r, double max_duration)
   }
 }
 
+/// std::system(command). std::system ignores SIGINT while the command runs: when Ctrl-C (or
+/// SIGTERM) ends the command, this process then ends by that signal too (its temporaries removed).
+int runCommand(const std::string& command)
+{
+  const int status = std::system(command.c_str());
+  for (const int signal_number : { SIGINT, SIGTERM })
+  {
+    if ((WIFSIGNALED(status) && WTERMSIG(status) == signal_number) ||
+        (WIFEXITED(status) && WEXITSTATUS(status) == 128 + signal_number))
+    {
+      std::raise(signal_number);
+    }
+  }
+  return status;
+}
+
 std::string reportMarkdown(const gap::Report& rep, const Options& o, bool plots)
 {
   std::ostringstream md;
@@ -641,7 +659,7 @@ int main(int argc, char** argv)
       const std::string cmd = "/usr/bin/python3 '" + script + "' --dir '" + o.out + "' --title '" +
                               fs::path(rep.real_source).filename().string() + " vs " + rep.scenario_name + ": " +
                               rep.verdict_effect + "' > /dev/null 2>&1";
-      plots = std::system(cmd.c_str()) == 0;
+      plots = runCommand(cmd) == 0;
       if (!plots)
       {
         std::cerr << "diagnose_gap: plots not made (" << script << " with python3-matplotlib)\n";
