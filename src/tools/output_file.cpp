@@ -111,7 +111,7 @@ int registerTemporary(const std::string& path)
 }
 
 /// "cannot write output 'PATH': why", with the directory named when it is the cause.
-std::string cannotWrite(const std::string& what, const std::string& path, int error)
+std::string cannotWrite(const std::string& path, int error)
 {
   const fs::path parent = fs::path(path).parent_path();
   const std::string dir = parent.empty() ? std::string(".") : parent.string();
@@ -119,7 +119,7 @@ std::string cannotWrite(const std::string& what, const std::string& path, int er
   const bool no_directory = error == ENOENT && !fs::is_directory(dir, ec);
   const std::string why = no_directory ? "directory '" + dir + "' does not exist" :
                                          std::string(std::strerror(error)) + " (in directory '" + dir + "')";
-  return "cannot write " + what + " '" + path + "': " + why;
+  return "cannot write output '" + path + "': " + why;
 }
 
 /// Creates (or empties) `path`; 0 or the errno of the failure.
@@ -181,7 +181,7 @@ OutputFile::OutputFile(std::string path) : path_(std::move(path)), target_(path_
   {
     g_slots[slot_].state.store(kFree);
     slot_ = -1;
-    throw std::runtime_error(cannotWrite("output", path_, error));
+    throw std::runtime_error(cannotWrite(path_, error));
   }
 }
 
@@ -213,7 +213,7 @@ void OutputFile::commit()
   slot_ = -1;
   if (error != 0)
   {
-    throw std::runtime_error(cannotWrite("output", path_, error));
+    throw std::runtime_error(cannotWrite(path_, error));
   }
 }
 
@@ -226,7 +226,7 @@ void OutputFile::commit(const std::string& contents)
   if (!file)
   {
     const int error = errno != 0 ? errno : EIO;
-    throw std::runtime_error(cannotWrite("output", path_, error));
+    throw std::runtime_error(cannotWrite(path_, error));
   }
   commit();
 }
