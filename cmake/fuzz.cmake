@@ -16,6 +16,6 @@ if(CATKIN_ENABLE_TESTING)
     target_link_libraries(test_fuzz_corpus_${target} ${PROJECT_NAME}_ros ${catkin_LIBRARIES})
     add_dependencies(test_fuzz_corpus_${target} ${PROJECT_NAME}_generate_messages_cpp)
   endforeach()
-  # bag: src/tools/compensate_bag.cpp is compiled in; it decompresses chunks itself (cmake/ros.cmake).
-  target_link_libraries(test_fuzz_corpus_bag roslz4 bz2)
+  # bag: src/tools/compensate_bag.cpp is compiled in.
+  target_link_libraries(test_fuzz_corpus_bag ${PROJECT_NAME}_tools)
 endif()

@@ -13,12 +13,13 @@ target_link_libraries(${PROJECT_NAME}_gap PUBLIC ${PROJECT_NAME}_sim ${PROJECT_N
 
 # validate_gap: the diagnosis on simulated recordings whose effect is withheld (no ROS).
 add_executable(validate_gap src/tools/validate_gap.cpp)
-target_link_libraries(validate_gap ${PROJECT_NAME}_gap)
+target_link_libraries(validate_gap ${PROJECT_NAME}_gap ${PROJECT_NAME}_tools)
 
 # diagnose_gap: a bag (rosbag C++ API) or a CSV against a scenario -> report.json/.md and plots.
 add_executable(diagnose_gap src/tools/diagnose_gap.cpp)
 target_include_directories(diagnose_gap PRIVATE include ${catkin_INCLUDE_DIRS})
-target_link_libraries(diagnose_gap ${PROJECT_NAME}_gap ${catkin_LIBRARIES})
+# The ROS wrapper library for its bag check (ros/bag_check.h).
+target_link_libraries(diagnose_gap ${PROJECT_NAME}_gap ${PROJECT_NAME}_ros ${PROJECT_NAME}_tools ${catkin_LIBRARIES})
 target_compile_definitions(diagnose_gap PRIVATE PBC_SOURCE_DIR="${CMAKE_CURRENT_SOURCE_DIR}")
 
 if(CATKIN_ENABLE_TESTING)

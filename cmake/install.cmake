@@ -2,7 +2,7 @@
 # description, launch files, configurations, scenarios and the rviz view.
 install(TARGETS
     ${PROJECT_NAME}_core ${PROJECT_NAME}_sim ${PROJECT_NAME}_sim_ros ${PROJECT_NAME}_ros
-    ${PROJECT_NAME}_nodelet ${PROJECT_NAME}_gap
+    ${PROJECT_NAME}_nodelet ${PROJECT_NAME}_gap ${PROJECT_NAME}_tools
     compensator_node compensate_bag simulate_imu simulator_node diagnose_gap validate_gap
     evaluate_compensator
   ARCHIVE DESTINATION ${CATKIN_PACKAGE_LIB_DESTINATION}

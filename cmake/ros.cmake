@@ -1,14 +1,18 @@
 # ROS wrapper, nodelet, node, offline bag tools and rostests.
 include_directories(include ${catkin_INCLUDE_DIRS})
 
-# Wrapper library: message conversions, parameters, the CompensatorRos class, the bag writer.
+# Wrapper library: message conversions, parameters, the IMU mounting, the CompensatorRos class,
+# the bag writer and the bag check of the offline tools.
 add_library(${PROJECT_NAME}_ros
   src/ros/conversions.cpp
   src/ros/parameters.cpp
   src/ros/raw_integrator.cpp
+  src/ros/mounting.cpp
+  src/ros/bag_check.cpp
   src/ros/compensator_ros.cpp
   src/ros/bag_writer.cpp)
-# roslz4 and bz2: BagWriter compresses chunks itself (not exported by rosbag_storage).
+# roslz4 and bz2: BagWriter compresses chunks itself, the bag check decompresses them as rosbag
+# will (not exported by rosbag_storage).
 target_link_libraries(${PROJECT_NAME}_ros ${PROJECT_NAME}_core ${catkin_LIBRARIES} yaml-cpp roslz4 bz2)
 add_dependencies(${PROJECT_NAME}_ros ${PROJECT_NAME}_gencfg ${PROJECT_NAME}_generate_messages_cpp)
 
@@ -20,8 +24,7 @@ target_link_libraries(compensator_node ${PROJECT_NAME}_ros ${catkin_LIBRARIES})
 
 # Offline: the same core and conversions over a bag, no master.
 add_executable(compensate_bag src/tools/compensate_bag.cpp)
-# roslz4 and bz2: its pre-check decompresses chunks as rosbag will (not exported by rosbag_storage).
-target_link_libraries(compensate_bag ${PROJECT_NAME}_ros ${catkin_LIBRARIES} roslz4 bz2)
+target_link_libraries(compensate_bag ${PROJECT_NAME}_ros ${PROJECT_NAME}_tools ${catkin_LIBRARIES})
 
 if(CATKIN_ENABLE_TESTING)
   find_package(rostest REQUIRED)
@@ -73,12 +76,14 @@ if(CATKIN_ENABLE_TESTING)
   target_link_libraries(test_ros_conversions ${PROJECT_NAME}_ros ${catkin_LIBRARIES})
   target_compile_definitions(test_ros_conversions PRIVATE PBC_SOURCE_DIR="${CMAKE_CURRENT_SOURCE_DIR}")
 
-  # compensate_bag end to end on the bench bag and its error paths (no master).
+  # compensate_bag end to end on the bench bag, the batch runs of docs/batch.md, and its error
+  # paths (no master).
   catkin_add_gtest(test_compensate_bag test/ros/compensate_bag_test.cpp)
   target_link_libraries(test_compensate_bag ${catkin_LIBRARIES})
   target_compile_definitions(test_compensate_bag PRIVATE
     PBC_COMPENSATE_BAG="$<TARGET_FILE:compensate_bag>"
     PBC_BENCH_BAG="${PBC_BENCH_BAG}"
+    PBC_CATKIN_DEVEL="${CATKIN_DEVEL_PREFIX}"
     PBC_SOURCE_DIR="${CMAKE_CURRENT_SOURCE_DIR}")
   add_dependencies(test_compensate_bag compensate_bag ${PROJECT_NAME}_test_bags
     ${PROJECT_NAME}_generate_messages_cpp)

@@ -16,7 +16,7 @@ target_link_libraries(${PROJECT_NAME}_sim_ros PUBLIC ${PROJECT_NAME}_sim ${catki
 # Command-line front end: scenario -> bag (and CSV), no ROS master needed.
 add_executable(simulate_imu src/tools/simulate_imu.cpp)
 target_include_directories(simulate_imu PRIVATE ${catkin_INCLUDE_DIRS})
-target_link_libraries(simulate_imu ${PROJECT_NAME}_sim_ros)
+target_link_libraries(simulate_imu ${PROJECT_NAME}_sim_ros ${PROJECT_NAME}_tools)
 
 # Live publisher on simulated time (thin: only calls the sim library).
 add_executable(simulator_node src/ros/simulator_node.cpp)

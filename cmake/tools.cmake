@@ -1,6 +1,13 @@
+# The tools' output files (temporary name, rename when complete, removed on a signal or an
+# error; never over an input), no ROS. Every tool that writes files links it (also those of
+# sim.cmake, ros.cmake and gap.cmake).
+add_library(${PROJECT_NAME}_tools src/tools/output_file.cpp)
+target_include_directories(${PROJECT_NAME}_tools PUBLIC include)
+
 # Offline tools on the cores (no ROS master); evaluate_compensator reads other estimators' bags.
 add_executable(evaluate_compensator src/tools/evaluate_compensator.cpp)
-target_link_libraries(evaluate_compensator ${PROJECT_NAME}_core ${PROJECT_NAME}_sim ${catkin_LIBRARIES})
+target_link_libraries(evaluate_compensator ${PROJECT_NAME}_core ${PROJECT_NAME}_sim ${PROJECT_NAME}_tools
+  ${catkin_LIBRARIES})
 
 # Speed benchmark of the core (Google Benchmark); run by scripts/bench, not a test.
 find_package(benchmark QUIET)
@@ -19,6 +26,18 @@ add_executable(bag_read_floor EXCLUDE_FROM_ALL test/bench/bag_read_floor.cpp)
 target_link_libraries(bag_read_floor ${catkin_LIBRARIES})
 
 if(CATKIN_ENABLE_TESTING)
-  # The tools' shared command-line parser (header only, no ROS).
-  catkin_add_gtest(test_command_line test/core/main.cpp test/tools/test_command_line.cpp)
+  # The tools' shared command line (parser, header only) and output files: the helper itself,
+  # then each tool that writes files run as a program (same file as an input refused, a signal
+  # or an unwritable directory leaves nothing behind and names the output).
+  catkin_add_gtest(test_command_line test/core/main.cpp test/tools/test_command_line.cpp
+    test/tools/test_output_files.cpp)
+  target_link_libraries(test_command_line ${PROJECT_NAME}_tools)
+  target_compile_definitions(test_command_line PRIVATE
+    PBC_SIMULATE_IMU="$<TARGET_FILE:simulate_imu>"
+    PBC_COMPENSATE_BAG="$<TARGET_FILE:compensate_bag>"
+    PBC_DIAGNOSE_GAP="$<TARGET_FILE:diagnose_gap>"
+    PBC_VALIDATE_GAP="$<TARGET_FILE:validate_gap>"
+    PBC_EVALUATE_COMPENSATOR="$<TARGET_FILE:evaluate_compensator>"
+    PBC_SOURCE_DIR="${CMAKE_CURRENT_SOURCE_DIR}")
+  add_dependencies(test_command_line simulate_imu compensate_bag diagnose_gap validate_gap evaluate_compensator)
 endif()

@@ -20,6 +20,17 @@ import matplotlib.pyplot as plt  # noqa: E402
 CH = ["ax", "ay", "az", "gx", "gy", "gz"]
 
 
+def save(fig, path):
+    """Writes the figure under a temporary name, renamed when complete (as the tools' files)."""
+    temporary = "%s.partial-%d.png" % (path[:-4], os.getpid())
+    try:
+        fig.savefig(temporary, dpi=72)
+        os.replace(temporary, path)
+    finally:
+        if os.path.exists(temporary):
+            os.remove(temporary)
+
+
 def read(path):
     with open(path) as f:
         return list(csv.DictReader(f))
@@ -61,7 +72,7 @@ def block_plot(d, name, title):
             ax.set_xlabel("t [s]", fontsize=7)
     axes[0].legend(fontsize=7)
     fig.tight_layout()
-    fig.savefig(os.path.join(d, name + ".png"), dpi=72)
+    save(fig, os.path.join(d, name + ".png"))
     plt.close(fig)
 
 
@@ -86,7 +97,7 @@ def main():
             ax.set_xlabel("Hz", fontsize=7)
     axes[0].legend(fontsize=7)
     fig.tight_layout()
-    fig.savefig(os.path.join(d, "spectra.png"), dpi=72)
+    save(fig, os.path.join(d, "spectra.png"))
     plt.close(fig)
 
     al = curves(read(os.path.join(d, "allan.csv")), "tau")
@@ -103,7 +114,7 @@ def main():
             ax.set_xlabel("tau [s]", fontsize=7)
     axes[0].legend(fontsize=7)
     fig.tight_layout()
-    fig.savefig(os.path.join(d, "allan.png"), dpi=72)
+    save(fig, os.path.join(d, "allan.png"))
     plt.close(fig)
 
     block_plot(d, "drift", "Block means (drift), whole recording: " + a.title)
@@ -130,7 +141,7 @@ def main():
     ax.set_title("gap heat map: z of log PSD per band, withheld part, scenario as given (clipped +-30): " + a.title, fontsize=8)
     fig.colorbar(im, ax=ax, fraction=0.02)
     fig.tight_layout()
-    fig.savefig(os.path.join(d, "heatmap.png"), dpi=72)
+    save(fig, os.path.join(d, "heatmap.png"))
     plt.close(fig)
 
 

@@ -10,9 +10,9 @@
 
 #include <geometry_msgs/TransformStamped.h>
 #include <nav_msgs/Path.h>
-#include <tf2/exceptions.h>
 
 #include "periodic_bias_compensation/core/calibration_file.h"
+#include "periodic_bias_compensation/ros/mounting.h"
 
 namespace periodic_bias_compensation
 {
@@ -306,45 +306,35 @@ bool CompensatorRos::updateMounting(const sensor_msgs::Imu& msg)
     return true;
   }
   const std::string& imu_frame = msg.header.frame_id;
-  if (imu_frame == params_.ros.base_frame || params_.ros.identity_mounting)
+  const MountingLookup lookup = lookupMounting(tf_buffer_, imu_frame, params_.ros);
+  mounting_ = lookup.mounting;
+  switch (lookup.source)
   {
-    mounting_state_ = MountingState::kIdentity;
-    return true;
+    case MountingSource::kNotNeeded:
+      mounting_state_ = MountingState::kIdentity;
+      return true;
+    case MountingSource::kTransform:
+      mounting_state_ = MountingState::kFound;
+      ROS_INFO("IMU mounting %s -> %s: %s", imu_frame.c_str(), params_.ros.base_frame.c_str(),
+               describeMounting(mounting_).c_str());
+      return true;
+    case MountingSource::kMissing:
+      break;
   }
-  try
+  const double t = msg.header.stamp.toSec();
+  if (first_stamp_ < 0.0 || t < first_stamp_)
   {
-    const geometry_msgs::TransformStamped tf = tf_buffer_.lookupTransform(params_.ros.base_frame, imu_frame, ros::Time(0));
-    const auto& r = tf.transform.rotation;
-    mounting_.imu_to_base = Quaternion(r.w, r.x, r.y, r.z).normalized();
-    if (!mounting_.imu_to_base.coeffs().allFinite())
-    {
-      mounting_.imu_to_base = Quaternion::Identity();
-      throw tf2::TransformException("transform " + imu_frame + " -> " + params_.ros.base_frame +
-                                    " has an invalid rotation");
-    }
-    mounting_state_ = MountingState::kFound;
-    ROS_INFO("IMU mounting %s -> %s: rotation (w x y z) = (%.4f %.4f %.4f %.4f)", imu_frame.c_str(),
-             params_.ros.base_frame.c_str(), mounting_.imu_to_base.w(), mounting_.imu_to_base.x(),
-             mounting_.imu_to_base.y(), mounting_.imu_to_base.z());
-    return true;
+    first_stamp_ = t;
   }
-  catch (const tf2::TransformException& e)
+  if (t - first_stamp_ < params_.ros.mount_timeout)
   {
-    const double t = msg.header.stamp.toSec();
-    if (first_stamp_ < 0.0 || t < first_stamp_)
-    {
-      first_stamp_ = t;
-    }
-    if (t - first_stamp_ < params_.ros.mount_timeout)
-    {
-      ROS_INFO_THROTTLE(1.0, "waiting for the transform %s -> %s", imu_frame.c_str(), params_.ros.base_frame.c_str());
-      return false;
-    }
-    mounting_state_ = MountingState::kFallback;
-    ROS_WARN("no transform %s -> %s after %.1f s (%s): using the identity as IMU mounting", imu_frame.c_str(),
-             params_.ros.base_frame.c_str(), params_.ros.mount_timeout, e.what());
-    return true;
+    ROS_INFO_THROTTLE(1.0, "waiting for the transform %s -> %s", imu_frame.c_str(), params_.ros.base_frame.c_str());
+    return false;
   }
+  mounting_state_ = MountingState::kFallback;
+  ROS_WARN("no transform %s -> %s after %.1f s (%s): using the identity as IMU mounting", imu_frame.c_str(),
+           params_.ros.base_frame.c_str(), params_.ros.mount_timeout, lookup.why.c_str());
+  return true;
 }
 
 void CompensatorRos::publishOutputs(const sensor_msgs::Imu& msg, const CompensatorOutput& out, SampleStatus status)

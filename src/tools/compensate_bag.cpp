@@ -1,45 +1,46 @@
 // compensate_bag: runs the compensator over a bag at full speed, without a ROS master, and writes
 // the same outputs as the node (odometry/filtered, odometry/wave, bias_state) to a new bag,
-// copying ground_truth/* through (as their bytes, not deserialised).
+// copying ground_truth/* through (as their bytes, not deserialised). The IMU's mounting comes
+// from the bag's /tf_static or /tf, looked up as the node does (ros/mounting.h).
 //
 //   compensate_bag --in IN.bag --out OUT.bag [--mode paper|default] [--params FILE.yaml]
 //                  [--imu-topic imu/data] [--outputs filtered,wave,bias,ground_truth]
 //                  [--compression none|lz4|bz2]
 //
-// The output is written to a temporary file next to OUT and renamed when complete, so a failure
-// never leaves a partial OUT behind; IN is never overwritten. Exit status: 0 success, 1 error,
-// 2 wrong command line.
+// The outputs are written to temporary files next to them and renamed when complete, so a
+// failure or a signal never leaves a partial OUT behind; an input is never overwritten
+// (tools/output_file.h). Exit status: 0 success, 1 error, 2 wrong command line.
 #include <algorithm>
 #include <chrono>
 #include <cinttypes>
 #include <cstdint>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <iostream>
 #include <map>
 #include <optional>
 #include <set>
 #include <stdexcept>
 #include <string>
-#include <string_view>
 #include <vector>
 
-#include <bzlib.h>
 #include <ros/exception.h>
-#include <roslz4/lz4s.h>
 #include <rosbag/bag.h>
 #include <rosbag/exceptions.h>
 #include <rosbag/view.h>
-#include <unistd.h>
+#include <tf2/buffer_core.h>
+#include <tf2_msgs/TFMessage.h>
 
 #include "periodic_bias_compensation/core/calibration_file.h"
 #include "periodic_bias_compensation/core/compensator.h"
 #include "periodic_bias_compensation/core/gain_tuning.h"
+#include "periodic_bias_compensation/ros/bag_check.h"
 #include "periodic_bias_compensation/ros/bag_writer.h"
 #include "periodic_bias_compensation/ros/conversions.h"
+#include "periodic_bias_compensation/ros/mounting.h"
 #include "periodic_bias_compensation/ros/parameters.h"
 #include "periodic_bias_compensation/tools/command_line.h"
+#include "periodic_bias_compensation/tools/output_file.h"
 
 namespace fs = std::filesystem;
 using namespace periodic_bias_compensation;
@@ -52,7 +53,8 @@ const char* const kUsage =
     "                      [--outputs filtered,wave,bias,ground_truth] [--compression none|lz4|bz2]\n"
     "Runs the bias compensator over IN.bag and writes odometry/filtered, odometry/wave and\n"
     "bias_state (plus ground_truth/* copied through) to OUT.bag. --params takes a YAML file with\n"
-    "the keys of config/compensator.yaml; --mode overrides its 'mode'.\n"
+    "the keys of config/compensator.yaml; --mode overrides its 'mode'. The IMU's mounting on\n"
+    "base_frame is looked up in IN.bag's /tf_static (then /tf), as the node looks it up in tf2.\n"
     "--outputs: which of them to write, comma-separated (default: all four).\n"
     "--compression: of OUT.bag's chunks (default: none, the fastest; lz4 writes about a fifth of\n"
     "the bytes, bz2 the fewest and is the slowest).\n"
@@ -141,6 +143,8 @@ std::optional<Options> parseArguments(int argc, char** argv)
   {
     throw UsageError("--in and --out are required");
   }
+  refuseOverwritingInputs({ { "--in", options.in }, { "--params", options.params } },
+                          { { "--out", options.out }, { "--tune-gains", options.tune_gains } });
   return options;
 }
 
@@ -174,373 +178,6 @@ Parameters loadParameters(const Options& options)
     }
   }
   return params;
-}
-
-/// Little-endian u32 at p.
-std::uint32_t u32(const char* p)
-{
-  return static_cast<std::uint32_t>(static_cast<unsigned char>(p[0])) |
-         (static_cast<std::uint32_t>(static_cast<unsigned char>(p[1])) << 8) |
-         (static_cast<std::uint32_t>(static_cast<unsigned char>(p[2])) << 16) |
-         (static_cast<std::uint32_t>(static_cast<unsigned char>(p[3])) << 24);
-}
-
-/// The fields of a record header that the structure check uses (raw values; empty if absent).
-struct RecordFields
-{
-  std::string op, compression, conn, count, ver, size;
-  std::string index_pos, conn_count, chunk_count, chunk_pos;  ///< file header, chunk info
-};
-
-constexpr char kOpMessage = '\x02', kOpFileHeader = '\x03', kOpIndexData = '\x04', kOpChunk = '\x05',
-               kOpChunkInfo = '\x06', kOpConnection = '\x07';
-
-/// Little-endian u64 of an 8-byte field, or nothing.
-std::optional<std::uint64_t> u64(const std::string& field)
-{
-  if (field.size() != 8)
-  {
-    return std::nullopt;
-  }
-  return static_cast<std::uint64_t>(u32(field.data())) | (static_cast<std::uint64_t>(u32(field.data() + 4)) << 32);
-}
-
-/// Where rosbag goes by offsets it reads from the file: the file header's index_pos must be the
-/// start of conn_count connection records followed by chunk_count chunk info records (read at
-/// open), and each chunk info's chunk_pos the start of a chunk record (read when iterating).
-/// `records`: offset and op of every top-level record, in file order.
-std::string checkOffsets(const RecordFields& file_header, const std::vector<std::pair<std::uint64_t, char>>& records,
-                         const std::vector<std::pair<std::uint64_t, std::uint64_t>>& chunk_positions)
-{
-  const std::optional<std::uint64_t> index_pos = u64(file_header.index_pos);
-  if (!index_pos || *index_pos == 0)
-  {
-    return std::string();  // no index: rosbag refuses the bag itself ("unindexed")
-  }
-  const auto start = std::find_if(records.begin(), records.end(),
-                                  [&](const auto& r) { return r.first == *index_pos; });
-  if (start == records.end())
-  {
-    return "the file header's index position " + std::to_string(*index_pos) + " is not the start of a record";
-  }
-  const std::uint32_t connections = file_header.conn_count.size() == 4 ? u32(file_header.conn_count.data()) : 0;
-  const std::uint32_t chunks = file_header.chunk_count.size() == 4 ? u32(file_header.chunk_count.data()) : 0;
-  auto next = start;
-  for (std::uint64_t k = 0; k < std::uint64_t{ connections } + chunks; ++k, ++next)
-  {
-    const char expected = k < connections ? kOpConnection : kOpChunkInfo;
-    if (next == records.end() || next->second != expected)
-    {
-      return "the file header announces " + std::to_string(connections) + " connection and " +
-             std::to_string(chunks) + " chunk info records at byte " + std::to_string(*index_pos) +
-             ", which the file does not hold";
-    }
-  }
-  for (const auto& chunk_info : chunk_positions)
-  {
-    const std::uint64_t chunk_pos = chunk_info.second;
-    if (std::none_of(records.begin(), records.end(),
-                     [&](const auto& r) { return r.first == chunk_pos && r.second == kOpChunk; }))
-    {
-      return "chunk info record at byte " + std::to_string(chunk_info.first) + " points at byte " +
-             std::to_string(chunk_pos) + ", where no chunk starts";
-    }
-  }
-  return std::string();
-}
-
-/// Checks that every field of a record header lies inside it and picks out RecordFields.
-/// @return an empty string, or what is wrong
-std::string checkHeader(std::string_view header, std::uint64_t where, RecordFields* fields)
-{
-  std::size_t offset = 0;
-  while (offset < header.size())
-  {
-    if (header.size() - offset < 4)
-    {
-      return "record header at byte " + std::to_string(where) + " ends inside a field length";
-    }
-    const std::uint32_t length = u32(header.data() + offset);
-    offset += 4;
-    if (length > header.size() - offset)
-    {
-      return "record header at byte " + std::to_string(where) + " has a field of " + std::to_string(length) +
-             " bytes in a header of " + std::to_string(header.size());
-    }
-    const std::string_view field = header.substr(offset, length);
-    offset += length;
-    const std::size_t equals = field.find('=');
-    const std::string_view name = field.substr(0, equals),
-                           value = equals == std::string_view::npos ? std::string_view() : field.substr(equals + 1);
-    for (auto [key, target] : { std::pair{ std::string_view("op"), &fields->op },
-                                { "compression", &fields->compression }, { "conn", &fields->conn },
-                                { "count", &fields->count }, { "ver", &fields->ver }, { "size", &fields->size },
-                                { "index_pos", &fields->index_pos }, { "conn_count", &fields->conn_count },
-                                { "chunk_count", &fields->chunk_count }, { "chunk_pos", &fields->chunk_pos } })
-    {
-      if (name == key)
-      {
-        target->assign(value);
-      }
-    }
-  }
-  return std::string();
-}
-
-/// One record at `offset` of `data` (a chunk read into memory): header and data inside `data`.
-/// On success sets *fields, *data_begin, *next (offset of the following record).
-std::string checkRecord(const std::string& data, std::size_t offset, std::uint64_t base, RecordFields* fields,
-                        std::size_t* data_begin, std::size_t* next)
-{
-  const std::uint32_t header_length = u32(data.data() + offset);
-  if (header_length > data.size() - offset - 4)
-  {
-    return "record at byte " + std::to_string(base + offset) + " inside a chunk runs past the chunk";
-  }
-  const std::string why = checkHeader(std::string_view(data).substr(offset + 4, header_length), base + offset, fields);
-  if (!why.empty())
-  {
-    return why;
-  }
-  std::size_t position = offset + 4 + header_length;
-  if (data.size() - position < 4)
-  {
-    return "record at byte " + std::to_string(base + position) + " inside a chunk has no data length";
-  }
-  const std::uint32_t data_length = u32(data.data() + position);
-  position += 4;
-  if (data_length > data.size() - position)
-  {
-    return "record data at byte " + std::to_string(base + position) + " inside a chunk runs past the chunk";
-  }
-  *data_begin = position;
-  *next = position + data_length;
-  return std::string();
-}
-
-/// What the index records after a chunk may point at.
-struct ChunkLayout
-{
-  bool present = false;
-  bool walked = false;               ///< records walked (decompressed first if need be): every record start is known
-  std::uint64_t uncompressed_size = 0;
-  std::vector<std::pair<std::uint32_t, std::string>> messages;  ///< offset of each message record (rising), its conn
-};
-
-/// A compressed chunk's data decompressed into *plain, as rosbag will (same libraries), so that
-/// its records can be walked before rosbag parses them unchecked. `declared`: the chunk header's
-/// uncompressed size; refused above 1000 x the compressed size + 1 MiB (rosbag would allocate it).
-std::string decompressChunk(const std::string& compression, std::string& data, std::uint64_t declared,
-                            std::uint64_t where, std::string* plain)
-{
-  const std::string what = "chunk at byte " + std::to_string(where) + " (" + compression + ")";
-  if (declared > 1000 * std::uint64_t{ data.size() } + (1u << 20))
-  {
-    return what + " declares " + std::to_string(declared) + " uncompressed bytes for " +
-           std::to_string(data.size()) + " compressed ones";
-  }
-  plain->assign(declared, '\0');
-  unsigned int produced = static_cast<unsigned int>(declared);
-  const bool ok = compression == "lz4" ?
-                      roslz4_buffToBuffDecompress(&data[0], static_cast<unsigned int>(data.size()), &(*plain)[0],
-                                                  &produced) == ROSLZ4_OK :
-                      BZ2_bzBuffToBuffDecompress(&(*plain)[0], &produced, &data[0],
-                                                 static_cast<unsigned int>(data.size()), 0, 0) == BZ_OK;
-  if (!ok || produced != declared)
-  {
-    return what + " does not decompress to the " + std::to_string(declared) + " bytes it declares";
-  }
-  return std::string();
-}
-
-/// The records of an uncompressed chunk; connection records' data is a header too.
-std::string walkChunk(const std::string& data, std::uint64_t base, ChunkLayout* layout)
-{
-  std::size_t offset = 0;
-  while (data.size() - offset >= 4)
-  {
-    RecordFields fields;
-    std::size_t data_begin = 0, next = 0;
-    std::string why = checkRecord(data, offset, base, &fields, &data_begin, &next);
-    if (why.empty() && fields.op == std::string(1, kOpConnection))
-    {
-      RecordFields unused;
-      why = checkHeader(std::string_view(data).substr(data_begin, next - data_begin), base + data_begin, &unused);
-    }
-    if (!why.empty())
-    {
-      return why;
-    }
-    if (fields.op == std::string(1, kOpMessage))
-    {
-      layout->messages.emplace_back(static_cast<std::uint32_t>(offset), fields.conn);
-    }
-    offset = next;
-  }
-  return offset == data.size() ? std::string() : "chunk ends inside a record length";
-}
-
-/// An index data record (version 1: count entries of time and offset into the chunk before it).
-/// rosbag reads a message at each offset without checking it (readHeaderFromBuffer; finding F10).
-std::string checkIndex(const RecordFields& fields, const std::string& data, std::uint64_t where,
-                       const ChunkLayout& chunk)
-{
-  const std::string at = "index record at byte " + std::to_string(where);
-  if (fields.ver.size() != 4 || u32(fields.ver.data()) != 1 || fields.count.size() != 4 || fields.conn.size() != 4)
-  {
-    return at + " is not a version 1 index with a count and a connection";
-  }
-  const std::uint64_t count = u32(fields.count.data());
-  if (data.size() != 12 * count)
-  {
-    return at + " holds " + std::to_string(data.size()) + " bytes for " + std::to_string(count) + " entries";
-  }
-  if (!chunk.present)
-  {
-    return at + " follows no chunk";
-  }
-  for (std::uint64_t i = 0; i < count; ++i)
-  {
-    const std::uint32_t offset = u32(data.data() + 12 * i + 8);
-    const auto message = std::lower_bound(chunk.messages.begin(), chunk.messages.end(), offset,
-                                          [](const auto& m, std::uint32_t o) { return m.first < o; });
-    const bool points_at_message = chunk.walked ? message != chunk.messages.end() && message->first == offset &&
-                                                      message->second == fields.conn :
-                                                  offset + 8ULL <= chunk.uncompressed_size;
-    if (!points_at_message)
-    {
-      return at + ": entry " + std::to_string(i) + " points at offset " + std::to_string(offset) +
-             (chunk.walked ? ", where the chunk has no message of that connection" :
-                             ", beyond the chunk's " + std::to_string(chunk.uncompressed_size) + " bytes");
-    }
-  }
-  return std::string();
-}
-
-/// Walks the record structure of a bag (format 2.0) before rosbag reads it: every field of
-/// every record header that is present must lie inside its header, also for the records inside
-/// uncompressed chunks, and every index entry must point at a message of its connection in the
-/// chunk before it (compressed chunks are decompressed first, as rosbag will). rosbag
-/// (ros::Header::parse, Bag::readHeaderFromBuffer) trusts those lengths and offsets and reads
-/// past its buffer on a corrupt one (found by test/fuzz/fuzz_bag.cpp; docs/reliability.md F7,
-/// F10). A record cut off by the end of the file (a bag that ends mid-chunk) is reported here
-/// too: rosbag would first allocate the length it claims.
-/// @return an empty string, or what is wrong and where
-std::string checkBagStructure(const std::string& path)
-{
-  std::ifstream file(path, std::ios::binary);
-  static const std::string kMagic = "#ROSBAG V2.0\n";
-  std::string magic(kMagic.size(), '\0');
-  if (!file.read(&magic[0], static_cast<std::streamsize>(magic.size())) || magic != kMagic)
-  {
-    // Only format 2.0 (every rosbag since 2010): rosbag's 1.2 reader and its handling of a
-    // garbled version line parse records unchecked (fuzz_bag found out-of-bounds reads in both).
-    std::string shown;
-    for (char c : magic)
-    {
-      shown += (c >= 32 && c < 127) ? c : '?';
-    }
-    return "the file does not start with '#ROSBAG V2.0' (it starts with '" + shown + "')";
-  }
-  file.seekg(0, std::ios::end);
-  const std::uint64_t size = static_cast<std::uint64_t>(file.tellg());
-  std::uint64_t position = kMagic.size();
-  ChunkLayout chunk;
-  RecordFields file_header;
-  std::vector<std::pair<std::uint64_t, char>> records;                  // offset, op
-  std::vector<std::pair<std::uint64_t, std::uint64_t>> chunk_positions;  // chunk info offset, chunk_pos
-  char length[4];
-  while (position + 4 <= size)
-  {
-    file.seekg(static_cast<std::streamoff>(position));
-    file.read(length, 4);
-    const std::uint32_t header_length = u32(length);
-    if (header_length > size - position - 4)
-    {
-      // Cut off (or a corrupt length). Said here: rosbag would first allocate the length the
-      // record claims (up to 4 GB) before finding that the file ends.
-      return "record at byte " + std::to_string(position) + " declares a " + std::to_string(header_length) +
-             "-byte header but the file ends " + std::to_string(size - position - 4) + " bytes later";
-    }
-    std::string header(header_length, '\0');
-    file.read(&header[0], header_length);
-    RecordFields fields;
-    std::string why = checkHeader(header, position, &fields);
-    if (!why.empty())
-    {
-      return why;
-    }
-    const std::uint64_t record = position;
-    position += 4 + header_length;
-    if (position + 4 > size)
-    {
-      return "the file ends inside the record before byte " + std::to_string(position + 4);
-    }
-    file.read(length, 4);
-    const std::uint32_t data_length = u32(length);
-    position += 4;
-    if (data_length > size - position)
-    {
-      return "record data at byte " + std::to_string(position) + " declares " + std::to_string(data_length) +
-             " bytes but the file ends " + std::to_string(size - position) + " bytes later";
-    }
-    const char op = fields.op.size() == 1 ? fields.op[0] : '\0';
-    records.emplace_back(record, op);
-    if (op == kOpFileHeader && records.size() == 1)
-    {
-      file_header = fields;
-    }
-    else if (op == kOpChunkInfo)
-    {
-      chunk_positions.emplace_back(record, u64(fields.chunk_pos).value_or(0));
-    }
-    const bool walk_chunk = op == kOpChunk && fields.compression == "none";
-    const bool compressed_chunk = op == kOpChunk && (fields.compression == "lz4" || fields.compression == "bz2");
-    std::string data;
-    if (op == kOpConnection || op == kOpIndexData || walk_chunk || compressed_chunk)
-    {
-      data.resize(data_length);
-      file.read(&data[0], data_length);
-    }
-    if (op == kOpConnection)
-    {
-      // A connection record's data is itself a header (topic, type, md5sum, definition).
-      RecordFields unused;
-      why = checkHeader(data, position, &unused);
-    }
-    else if (op == kOpChunk)
-    {
-      chunk = ChunkLayout();
-      chunk.present = true;
-      chunk.walked = walk_chunk;
-      chunk.uncompressed_size = fields.size.size() == 4 ? u32(fields.size.data()) : 0;
-      if (walk_chunk)
-      {
-        why = walkChunk(data, position, &chunk);
-      }
-      else if (compressed_chunk)
-      {
-        // Offsets in the messages below are then counted in the decompressed data.
-        std::string plain;
-        why = decompressChunk(fields.compression, data, chunk.uncompressed_size, record, &plain);
-        if (why.empty())
-        {
-          chunk.walked = true;
-          why = walkChunk(plain, position, &chunk);
-        }
-      }
-    }
-    else if (op == kOpIndexData)
-    {
-      why = checkIndex(fields, data, record, chunk);
-    }
-    if (!why.empty())
-    {
-      return why;
-    }
-    position += data_length;
-  }
-  return checkOffsets(file_header, records, chunk_positions);
 }
 
 /// Writes the outputs of one bag; the caller owns the temporary file.
@@ -584,8 +221,9 @@ public:
     }
   }
 
-  /// Runs over the input; a truncated or corrupt input (rosbag::BagException, a message that
-  /// does not deserialise) becomes one std::runtime_error that says so and what to do.
+  /// Runs over the input, writing OUT to `temp_path`; a truncated or corrupt input
+  /// (rosbag::BagException, a message that does not deserialise) becomes one std::runtime_error
+  /// that says so and what to do.
   void run(const std::string& temp_path)
   {
     try
@@ -604,19 +242,13 @@ public:
 
   std::string corruptMessage(const std::string& what) const
   {
-    return "input bag '" + options_.in + "' is truncated or corrupt (" + what +
-           "); a bag cut off while recording has no index: 'rosbag reindex " + options_.in +
-           "' recovers the messages written before the cut. Nothing was written to " + options_.out +
+    return corruptBagMessage(options_.in, what) + " Nothing was written to " + options_.out +
            (received_ > 0 ? " (" + std::to_string(received_) + " IMU messages had been read)" : std::string());
   }
 
+  /// IN has passed checkBagStructure (bagFileProblem).
   void runUnchecked(const std::string& temp_path)
   {
-    const std::string structure = checkBagStructure(options_.in);
-    if (!structure.empty())
-    {
-      throw std::runtime_error(corruptMessage(structure));
-    }
     rosbag::Bag in;
     in.open(options_.in, rosbag::bagmode::Read);
     const std::string imu_topic = absoluteTopic(options_.imu_topic);
@@ -639,6 +271,8 @@ public:
       throw std::runtime_error("no topic '" + options_.imu_topic + "' in " + options_.in +
                                " (topics: " + (list.empty() ? "none" : list) + ")");
     }
+
+    resolveMounting(in, imu_topic);
 
     // What each connection of IN is to this tool: only those used are read. A message finds its
     // connection by its connection header (the same object for all messages of a connection).
@@ -710,9 +344,9 @@ public:
     reportProgress(span, span);
   }
 
-  /// --tune-gains: paper mode's gains tuned on the samples of this bag (tunePaperGains), written
-  /// as parameters to options_.tune_gains. Nothing is written on error.
-  void tuneGains() const
+  /// --tune-gains: paper mode's gains tuned on the samples of this bag (tunePaperGains), as the
+  /// parameter file to write (YAML).
+  std::string tuneGains() const
   {
     if (tuning_samples_.size() < 2)
     {
@@ -743,18 +377,8 @@ public:
                   "[m, x y z]: %.4f %.4f %.4f with the gains given, %.4f %.4f %.4f with these",
                   options_.in.c_str(), settle, tuning.score_start[0], tuning.score_start[1], tuning.score_start[2],
                   tuning.score[0], tuning.score[1], tuning.score[2]);
-    const std::string temp = options_.tune_gains + ".partial-" + std::to_string(::getpid());
-    {
-      std::ofstream file(temp);
-      file << gainsToYaml(tuning.gains, summary) << "mode: paper\n";
-      if (!file.flush())
-      {
-        fs::remove(temp);
-        throw std::runtime_error("cannot write " + options_.tune_gains);
-      }
-    }
-    fs::rename(temp, options_.tune_gains);
-    std::fprintf(stderr, "compensate_bag: %s\ncompensate_bag: wrote %s\n", summary, options_.tune_gains.c_str());
+    std::fprintf(stderr, "compensate_bag: %s\n", summary);
+    return gainsToYaml(tuning.gains, summary) + "mode: paper\n";
   }
 
   void printSummary() const
@@ -785,6 +409,85 @@ private:
     std::optional<std::uint32_t> copy;    ///< OUT's connection, for kCopy
   };
 
+  /// The messages of `topic` in IN (with or without its leading '/') up to bag time `until`.
+  static rosbag::View topicView(const rosbag::Bag& in, const std::string& topic, const ros::Time& until = ros::TIME_MAX)
+  {
+    return rosbag::View(
+        in, [topic](const rosbag::ConnectionInfo* c) { return absoluteTopic(c->topic) == topic; }, ros::TIME_MIN,
+        until);
+  }
+
+  /// Adds the transforms of IN's `topic` (tf2_msgs/TFMessage) up to bag time `until` to *tf.
+  /// @return how many were added
+  static int addTransforms(const rosbag::Bag& in, const std::string& topic, const ros::Time& until, tf2::BufferCore* tf)
+  {
+    int added = 0;
+    for (const rosbag::MessageInstance& m : topicView(in, topic, until))
+    {
+      const tf2_msgs::TFMessage::ConstPtr message = m.instantiate<tf2_msgs::TFMessage>();
+      if (!message)
+      {
+        std::fprintf(stderr, "compensate_bag: %s holds %s, not tf2_msgs/TFMessage: not used for the mounting\n",
+                     topic.c_str(), m.getDataType().c_str());
+        return added;
+      }
+      for (const geometry_msgs::TransformStamped& transform : message->transforms)
+      {
+        added += tf->setTransform(transform, "bag " + topic, topic == "/tf_static") ? 1 : 0;
+      }
+    }
+    return added;
+  }
+
+  /// The IMU's mounting, decided once before the messages are processed, as the node does on its
+  /// first message (lookupMounting) from the bag's /tf_static and, failing that, its /tf up to
+  /// mount_timeout after the first IMU message. Nothing is dropped meanwhile: the bag holds
+  /// them all already. Said on stderr.
+  void resolveMounting(const rosbag::Bag& in, const std::string& imu_topic)
+  {
+    rosbag::View imu = topicView(in, imu_topic);
+    const auto first = imu.begin();
+    const sensor_msgs::Imu::ConstPtr message = first == imu.end() ? nullptr : first->instantiate<sensor_msgs::Imu>();
+    if (!message)
+    {
+      return;  // no message, or not sensor_msgs/Imu: the main loop says so
+    }
+    const std::string frame = params_.ros.imu_frame.empty() ? message->header.frame_id : params_.ros.imu_frame;
+    const std::string& base = params_.ros.base_frame;
+    tf2::BufferCore tf;
+    MountingLookup lookup = lookupMounting(tf, frame, params_.ros);
+    std::string source = "/tf_static";
+    int transforms = 0;
+    if (lookup.source == MountingSource::kMissing)
+    {
+      transforms += addTransforms(in, source, ros::TIME_MAX, &tf);
+      lookup = lookupMounting(tf, frame, params_.ros);
+    }
+    if (lookup.source == MountingSource::kMissing)
+    {
+      source = "/tf";
+      transforms += addTransforms(in, source, first->getTime() + ros::Duration(params_.ros.mount_timeout), &tf);
+      lookup = lookupMounting(tf, frame, params_.ros);
+    }
+    mounting_ = lookup.mounting;
+    switch (lookup.source)
+    {
+      case MountingSource::kNotNeeded:
+        std::fprintf(stderr, "compensate_bag: mounting: %s\n",
+                     frame == base ? ("the IMU's frame is " + base + ": none needed").c_str() :
+                                     ("identity_mounting: " + frame + " taken as aligned with " + base).c_str());
+        break;
+      case MountingSource::kTransform:
+        std::fprintf(stderr, "compensate_bag: mounting: %s -> %s from %s, %s\n", frame.c_str(), base.c_str(),
+                     source.c_str(), describeMounting(mounting_).c_str());
+        break;
+      case MountingSource::kMissing:
+        std::fprintf(stderr, "compensate_bag: no %s -> %s transform in the bag: taken as aligned%s\n", frame.c_str(),
+                     base.c_str(), transforms > 0 ? (" (tf2: " + lookup.why + ")").c_str() : "");
+        break;
+    }
+  }
+
   static void reportProgress(double done, double span)
   {
     std::fprintf(stderr, "compensate_bag: %3.0f%% (%.1f of %.1f s)\n", 100.0 * done / span, done, span);
@@ -809,11 +512,6 @@ private:
     {
       ++wrong_frame_;
       return;
-    }
-    if (received_ == 1 && imu.header.frame_id != params_.ros.base_frame)
-    {
-      std::fprintf(stderr, "compensate_bag: no mounting transform offline: %s is taken as aligned with %s\n",
-                   imu.header.frame_id.c_str(), params_.ros.base_frame.c_str());
     }
     const ImuSample sample = toImuSample(imu, mounting_);
     if (!plausible(sample))
@@ -885,29 +583,13 @@ private:
   std::optional<std::uint32_t> filtered_connection_, wave_connection_, bias_connection_;  ///< in OUT
 };
 
-/// Checks the input exists and that OUT cannot clobber it.
-void checkPaths(const Options& options)
+/// Checks the input exists and that rosbag can read it safely (bag_check.h).
+void checkInput(const Options& options)
 {
-  std::error_code ec;
-  if (!fs::is_regular_file(options.in, ec))
+  const std::string problem = bagFileProblem(options.in);
+  if (!problem.empty())
   {
-    throw std::runtime_error("input bag '" + options.in + "' does not exist or is not a file");
-  }
-  const fs::path in = fs::weakly_canonical(options.in, ec);
-  const fs::path out = fs::weakly_canonical(options.out, ec);
-  if (in == out || (fs::exists(options.out, ec) && fs::equivalent(options.in, options.out, ec)))
-  {
-    throw std::runtime_error("--out must differ from --in ('" + options.in + "' would be overwritten)");
-  }
-  if (!options.tune_gains.empty() &&
-      (fs::weakly_canonical(options.tune_gains, ec) == in || fs::weakly_canonical(options.tune_gains, ec) == out))
-  {
-    throw std::runtime_error("--tune-gains must differ from --in and --out");
-  }
-  const fs::path dir = out.parent_path();
-  if (!dir.empty() && !fs::is_directory(dir, ec))
-  {
-    throw std::runtime_error("output directory '" + dir.string() + "' does not exist");
+    throw std::runtime_error(problem);
   }
 }
 }  // namespace
@@ -917,26 +599,33 @@ void checkPaths(const Options& options)
 int compensateBagMain(int argc, char** argv)
 {
   Options options;
-  std::string temp_path;
   try
   {
     const std::optional<Options> parsed = parseArguments(argc, argv);
     if (!parsed)
       return 0;
     options = *parsed;
-    checkPaths(options);
+    checkInput(options);
     const Parameters params = loadParameters(options);
-    BagCompensator compensator(options, params);
-    temp_path = options.out + ".partial-" + std::to_string(::getpid());
-    compensator.run(temp_path);
+    // Both outputs are created (as temporaries) before the bag is read: one that cannot be
+    // written is said at once.
+    OutputFile out(options.out);
+    std::optional<OutputFile> gains;
     if (!options.tune_gains.empty())
     {
-      compensator.tuneGains();
+      gains.emplace(options.tune_gains);
     }
-    fs::rename(temp_path, options.out);
-    temp_path.clear();
+    BagCompensator compensator(options, params);
+    compensator.run(out.temporary());
+    const std::string tuned = gains ? compensator.tuneGains() : std::string();
+    out.commit();
     compensator.printSummary();
     std::fprintf(stderr, "compensate_bag: wrote %s\n", options.out.c_str());
+    if (gains)
+    {
+      gains->commit(tuned);
+      std::fprintf(stderr, "compensate_bag: wrote %s\n", options.tune_gains.c_str());
+    }
     return 0;
   }
   catch (const UsageError& e)
@@ -947,11 +636,6 @@ int compensateBagMain(int argc, char** argv)
   catch (const std::exception& e)
   {
     std::fprintf(stderr, "compensate_bag: error: %s\n", e.what());
-    if (!temp_path.empty())
-    {
-      std::error_code ec;
-      fs::remove(temp_path, ec);
-    }
     return 1;
   }
 }

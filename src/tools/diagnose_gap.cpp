@@ -16,12 +16,15 @@
 // COL is a column name of the CSV header or a 0-based index, optionally prefixed with '-' to
 // negate it; without a t column the time is k / rate. Scales convert to SI (e.g. --accel-scale
 // 9.80665 for g, --gyro-scale 0.0174532925 for deg/s). Writes DIR/report.json, DIR/report.md,
-// DIR/*.csv and (with python3-matplotlib) DIR/*.png; prints a one-screen summary.
+// DIR/*.csv and (with python3-matplotlib) DIR/*.png, each renamed into place when complete and
+// never over an input (tools/output_file.h); prints a one-screen summary.
 // Exit status: 0 done, 1 error, 2 wrong command line.
 #include <sys/stat.h>
+#include <sys/wait.h>
 
 #include <algorithm>
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -32,7 +35,9 @@
 #include <string>
 #include <vector>
 
+#include <ros/exception.h>
 #include <rosbag/bag.h>
+#include <rosbag/exceptions.h>
 #include <rosbag/view.h>
 #include <nav_msgs/Odometry.h>
 #include <sensor_msgs/Imu.h>
@@ -40,8 +45,10 @@
 
 #include "periodic_bias_compensation/gap/csv.h"
 #include "periodic_bias_compensation/gap/gap.h"
+#include "periodic_bias_compensation/ros/bag_check.h"
 #include "periodic_bias_compensation/sim/scenario.h"
 #include "periodic_bias_compensation/tools/command_line.h"
+#include "periodic_bias_compensation/tools/output_file.h"
 
 namespace fs = std::filesystem;
 namespace gap = periodic_bias_compensation::gap;
@@ -57,6 +64,10 @@ const char* const kUsage =
     "         [--truth-smooth S] [--no-truth] [--truth-position-scale K] (CSV truth columns px,py,pz,qw,qx,qy,qz)\n";
 
 using periodic_bias_compensation::UsageError;
+
+/// The files diagnose_gap writes in --out (the plots aside).
+const char* const kReportFiles[] = { "report.json", "fitted_scenario.yaml", "psd.csv",  "allan.csv",
+                                     "drift.csv",   "features.csv",         "truth.csv", "report.md" };
 
 struct Options
 {
@@ -79,7 +90,7 @@ std::string absoluteTopic(const std::string& t)
   return (!t.empty() && t.front() == '/') ? t : "/" + t;
 }
 
-gap::Recording readBag(const Options& o)
+gap::Recording readBagUnchecked(const Options& o)
 {
   rosbag::Bag bag(o.real, rosbag::bagmode::Read);
   gap::Recording r;
@@ -170,6 +181,29 @@ gap::Recording readBag(const Options& o)
   return r;
 }
 
+/// The recording of --real; a bag that is missing, empty, cut off or corrupt is a
+/// std::runtime_error that names it (ros/bag_check.h), never rosbag's text alone.
+gap::Recording readBag(const Options& o)
+{
+  const std::string problem = periodic_bias_compensation::bagFileProblem(o.real);
+  if (!problem.empty())
+  {
+    throw std::runtime_error(problem);
+  }
+  try
+  {
+    return readBagUnchecked(o);
+  }
+  catch (const rosbag::BagException& e)
+  {
+    throw std::runtime_error(periodic_bias_compensation::corruptBagMessage(o.real, e.what()));
+  }
+  catch (const ros::Exception& e)
+  {
+    throw std::runtime_error(periodic_bias_compensation::corruptBagMessage(o.real, e.what()));
+  }
+}
+
 gap::Recording readCsv(const Options& o)
 {
   gap::CsvOptions csv;
@@ -219,6 +253,22 @@ void normalise(gap::Recording* r, double max_duration)
   {
     r->rate = gap::estimateRate(*r);
   }
+}
+
+/// std::system(command). std::system ignores SIGINT while the command runs: when Ctrl-C (or
+/// SIGTERM) ends the command, this process then ends by that signal too (its temporaries removed).
+int runCommand(const std::string& command)
+{
+  const int status = std::system(command.c_str());
+  for (const int signal_number : { SIGINT, SIGTERM })
+  {
+    if ((WIFSIGNALED(status) && WTERMSIG(status) == signal_number) ||
+        (WIFEXITED(status) && WEXITSTATUS(status) == 128 + signal_number))
+    {
+      std::raise(signal_number);
+    }
+  }
+  return status;
 }
 
 std::string reportMarkdown(const gap::Report& rep, const Options& o, bool plots)
@@ -345,6 +395,17 @@ int main(int argc, char** argv)
     {
       throw UsageError("--fit-fraction must be in (0.1, 0.9)");
     }
+    periodic_bias_compensation::requireAtLeast("--ensemble", o.diag.ensemble, 1);
+    periodic_bias_compensation::requireAtLeast("--threads", o.diag.threads, 1);
+    periodic_bias_compensation::requireAtLeast("--steps", o.steps, 0);
+    periodic_bias_compensation::requireAtLeast("--skip-lines", o.skip_lines, 0);
+    std::vector<periodic_bias_compensation::NamedPath> outputs;
+    for (const char* name : kReportFiles)
+    {
+      outputs.push_back({ "--out", (fs::path(o.out) / name).string() });
+    }
+    periodic_bias_compensation::refuseOverwritingInputs(
+        { { "--real", o.real }, { "--real-csv", o.real_csv }, { "--sim", o.scenario } }, outputs);
   }
   catch (const std::exception& e)
   {
@@ -356,6 +417,8 @@ int main(int argc, char** argv)
   try
   {
     scenario = sim::loadScenario(o.scenario);
+    // Before the reading and the diagnosis: a directory that cannot be written is said at once.
+    periodic_bias_compensation::prepareOutputDirectory(o.out);
     real = o.real.empty() ? readCsv(o) : readBag(o);
   }
   catch (const gap::CsvOptionError& e)
@@ -370,9 +433,11 @@ int main(int argc, char** argv)
   }
   try
   {
+    const auto write = [&o](const std::string& name, const std::string& contents) {
+      periodic_bias_compensation::writeOutputFile((fs::path(o.out) / name).string(), contents);
+    };
     normalise(&real, o.max_duration);
     const gap::Report rep = gap::diagnose(real, scenario, o.diag);
-    fs::create_directories(o.out);
     // Stepwise: add the named effect to the model and diagnose again, while an effect is named.
     struct Step
     {
@@ -419,15 +484,15 @@ int main(int argc, char** argv)
     std::string json = gap::reportJson(rep);
     const auto pos = json.rfind("  \"seconds\"");
     json.insert(pos, "  \"stepwise\": " + stepwise.str() + ",\n");
-    std::ofstream(o.out + "/report.json") << json;
-    std::ofstream(o.out + "/fitted_scenario.yaml") << sim::toYaml(model);
-    std::ofstream(o.out + "/psd.csv") << rep.psd_csv;
-    std::ofstream(o.out + "/allan.csv") << rep.allan_csv;
-    std::ofstream(o.out + "/drift.csv") << rep.drift_csv;
-    std::ofstream(o.out + "/features.csv") << rep.features_csv;
+    write("report.json", json);
+    write("fitted_scenario.yaml", sim::toYaml(model));
+    write("psd.csv", rep.psd_csv);
+    write("allan.csv", rep.allan_csv);
+    write("drift.csv", rep.drift_csv);
+    write("features.csv", rep.features_csv);
     if (rep.has_truth)
     {
-      std::ofstream(o.out + "/truth.csv") << rep.truth_csv;
+      write("truth.csv", rep.truth_csv);
     }
     bool plots = false;
     if (o.plots)
@@ -436,7 +501,7 @@ int main(int argc, char** argv)
       const std::string cmd = "/usr/bin/python3 '" + script + "' --dir '" + o.out + "' --title '" +
                               fs::path(rep.real_source).filename().string() + " vs " + rep.scenario_name + ": " +
                               rep.verdict_effect + "' > /dev/null 2>&1";
-      plots = std::system(cmd.c_str()) == 0;
+      plots = runCommand(cmd) == 0;
       if (!plots)
       {
         std::cerr << "diagnose_gap: plots not made (" << script << " with python3-matplotlib)\n";
@@ -460,7 +525,7 @@ int main(int argc, char** argv)
     }
     sm << "\nThe model with every named effect: `fitted_scenario.yaml`.\n";
     md.insert(md.find("\nMethod and limits"), sm.str());
-    std::ofstream(o.out + "/report.md") << md;
+    write("report.md", md);
     std::cout << gap::reportSummary(rep) << so.str() << "\nreport: " << o.out << "/report.md, " << o.out
               << "/report.json, " << o.out << "/fitted_scenario.yaml\n";
   }

@@ -7,6 +7,9 @@
 //   evaluate_compensator --scenario config/scenarios/paper_bench.yaml
 //       [--calibration-scenario config/scenarios/paper_static.yaml] [--seeds 5] [--settle 20]
 //       [--estimate NAME=BAG_PATTERN]... [--markdown OUT.md] [--csv OUT.csv]
+//
+// OUT.md and OUT.csv are renamed into place when complete, never over an input
+// (tools/output_file.h). Exit status: 0 success, 1 error, 2 wrong command line.
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -30,6 +33,7 @@
 #include "periodic_bias_compensation/sim/core_sample.h"
 #include "periodic_bias_compensation/sim/simulator.h"
 #include "periodic_bias_compensation/tools/command_line.h"
+#include "periodic_bias_compensation/tools/output_file.h"
 
 namespace pbc = periodic_bias_compensation;
 namespace sim = periodic_bias_compensation::sim;
@@ -499,6 +503,12 @@ int main(int argc, char** argv)
     if (!parsed)
       return 0;
     options = *parsed;
+    std::vector<pbc::NamedPath> inputs = { { "--scenario", options.scenario },
+                                           { "--calibration-scenario", options.calibration_scenario } };
+    for (const auto& [name, pattern] : options.estimates)
+      for (int seed = 1; seed <= options.seeds; ++seed)
+        inputs.push_back({ "--estimate " + name, seedPath(pattern, seed) });
+    pbc::refuseOverwritingInputs(inputs, { { "--markdown", options.markdown }, { "--csv", options.csv } });
   }
   catch (const pbc::UsageError& e)
   {
@@ -507,6 +517,12 @@ int main(int argc, char** argv)
   }
   try
   {
+    // Created before the runs: an output that cannot be written is said at once.
+    std::optional<pbc::OutputFile> markdown_file, csv_file;
+    if (!options.markdown.empty())
+      markdown_file.emplace(options.markdown);
+    if (!options.csv.empty())
+      csv_file.emplace(options.csv);
     sim::Scenario scenario = sim::loadScenario(options.scenario);
     if (options.duration > 0.0)
       scenario.duration = options.duration;
@@ -627,9 +643,9 @@ int main(int argc, char** argv)
              "| wave RMS error [% of true wave RMS] | wave RMS error [% of Hs] |\n"
              "|---|---|---|---|---|---|---|---|---|---|---|\n";
     std::ofstream csv;
-    if (!options.csv.empty())
+    if (csv_file)
     {
-      csv.open(options.csv);
+      csv.open(csv_file->temporary());
       csv << "method,axis,seed,slow_60s_m,slow_10min_m,slow_30min_m,slow_final_m,slow_rms_m,total_final_m,"
              "total_rms_m,wave_rms_percent,wave_hs_percent\n";
     }
@@ -687,11 +703,15 @@ int main(int argc, char** argv)
             << " s; medians over seeds 1.." << options.seeds << "; RMS errors from " << options.settle
             << " s to the end\n";
     std::cout << heading.str() << table.str();
-    if (!options.markdown.empty())
+    if (csv_file)
     {
-      std::ofstream md(options.markdown);
-      md << heading.str() << "\n" << table.str();
+      csv.close();
+      if (!csv)
+        throw std::runtime_error("cannot write output '" + options.csv + "' (disk full?)");
+      csv_file->commit();
     }
+    if (markdown_file)
+      markdown_file->commit(heading.str() + "\n" + table.str());
     return 0;
   }
   catch (const std::exception& e)

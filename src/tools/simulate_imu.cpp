@@ -1,5 +1,6 @@
 // simulate_imu: runs a simulator scenario and writes a bag (and optionally a CSV) without a
-// ROS master. See docs/simulator.md.
+// ROS master. See docs/simulator.md. Outputs are renamed into place when complete and never
+// written over the scenario. Exit status: 0 success, 1 error, 2 wrong command line.
 #include <chrono>
 #include <cstdio>
 #include <fstream>
@@ -16,6 +17,7 @@
 #include "periodic_bias_compensation/ros/sim_messages.h"
 #include "periodic_bias_compensation/sim/simulator.h"
 #include "periodic_bias_compensation/tools/command_line.h"
+#include "periodic_bias_compensation/tools/output_file.h"
 
 namespace sim = periodic_bias_compensation::sim;
 namespace pbc = periodic_bias_compensation;
@@ -61,6 +63,7 @@ std::optional<Options> parseOptions(int argc, char** argv)
     return std::nullopt;
   if (!o.list_effects && o.scenario.empty())
     throw pbc::UsageError("--scenario is required");
+  pbc::refuseOverwritingInputs({ { "--scenario", o.scenario } }, { { "--out", o.bag }, { "--csv", o.csv } });
   return o;
 }
 
@@ -130,19 +133,19 @@ int run(const Options& o)
   }
   const pbc::SimMessageBuilder builder(simulator.scenario());
 
+  // Written under temporary names, renamed when complete (tools/output_file.h).
+  std::optional<pbc::OutputFile> bag_file, csv_file;
   std::unique_ptr<rosbag::Bag> bag;
   if (!o.bag.empty())
   {
-    bag = std::make_unique<rosbag::Bag>(o.bag, rosbag::bagmode::Write);
+    bag_file.emplace(o.bag);
+    bag = std::make_unique<rosbag::Bag>(bag_file->temporary(), rosbag::bagmode::Write);
   }
   std::ofstream csv;
   if (!o.csv.empty())
   {
-    csv.open(o.csv);
-    if (!csv)
-    {
-      throw std::runtime_error("cannot write " + o.csv);
-    }
+    csv_file.emplace(o.csv);
+    csv.open(csv_file->temporary());
     csv << std::setprecision(17);
     writeCsvHeader(csv);
   }
@@ -177,6 +180,20 @@ int run(const Options& o)
     bag->write(Topics::kTruthSlow, t, messages.truth_slow);
     bag->write(Topics::kTruthWave, t, messages.truth_wave);
   }
+  if (bag)
+  {
+    bag->close();
+    bag_file->commit();
+  }
+  if (csv.is_open())
+  {
+    csv.close();
+    if (!csv)
+    {
+      throw std::runtime_error("cannot write output '" + o.csv + "' (disk full?)");
+    }
+    csv_file->commit();
+  }
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   std::cerr << "simulate_imu: " << simulator.sampleCount() << " samples (" << dropped << " dropped), "
             << simulator.scenario().duration << " s at " << simulator.scenario().rate << " Hz, seed " << seed
@@ -185,7 +202,7 @@ int run(const Options& o)
   {
     std::cerr << " -> " << o.bag;
   }
-  if (csv.is_open())
+  if (csv_file)
   {
     std::cerr << " -> " << o.csv;
   }

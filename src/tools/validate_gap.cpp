@@ -7,7 +7,9 @@
 //   validate_gap [--small] [--seeds N] [--duration S] [--rate HZ] [--md FILE] [--json FILE] [--quiet]
 //                [--effect NAME] [--motion static|sinusoids|sea] [--verbose] [--bench-hours H]
 //
-// Exit status: 0 targets met, 3 targets missed (the tables are printed either way), 1 error.
+// --md and --json are renamed into place when complete (tools/output_file.h).
+// Exit status: 0 targets met, 3 targets missed (the tables are printed either way), 1 error,
+// 2 wrong command line.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -16,6 +18,7 @@
 #include <fstream>
 #include <iostream>
 #include <map>
+#include <optional>
 #include <random>
 #include <sstream>
 #include <string>
@@ -25,6 +28,7 @@
 #include "periodic_bias_compensation/sim/effects.h"
 #include "periodic_bias_compensation/sim/scenario.h"
 #include "periodic_bias_compensation/tools/command_line.h"
+#include "periodic_bias_compensation/tools/output_file.h"
 
 namespace gap = periodic_bias_compensation::gap;
 namespace pbc = periodic_bias_compensation;
@@ -375,38 +379,10 @@ struct CaseResult
   double effect_gap = 0.0;  ///< gap of the effect's own shift (Detectability)
   double effect_max_z = 0.0;
 };
-}  // namespace
 
-int main(int argc, char** argv)
+/// The validation (or --bench-hours), writing its tables to the outputs given.
+int validate(Options opt, pbc::OutputFile* md_file, pbc::OutputFile* json_file)
 {
-  Options opt;
-  pbc::CommandLine cli(
-      "usage: validate_gap [--small] [--seeds N] [--duration S] [--rate HZ] [--md FILE] [--json FILE]\n"
-      "                    [--quiet] [--verbose] [--effect NAME] [--motion NAME] [--bench-hours H]\n"
-      "Withholds each named effect from a simulated 'real' recording, diagnoses the gap against the\n"
-      "scenario without it and scores the verdicts (docs/gap.md). --bench-hours H times one diagnosis\n"
-      "of H hours of 100 Hz data instead.\n");
-  cli.flag("--small", &opt.small)
-      .integer("--seeds", &opt.seeds)
-      .number("--duration", &opt.duration)
-      .number("--rate", &opt.rate)
-      .text("--md", &opt.md)
-      .text("--json", &opt.json)
-      .flag("--quiet", &opt.quiet)
-      .flag("--verbose", &opt.verbose)
-      .text("--effect", &opt.only_effect)
-      .text("--motion", &opt.only_motion)
-      .number("--bench-hours", &opt.bench_hours);
-  try
-  {
-    if (!cli.parse(argc, argv))
-      return 0;
-  }
-  catch (const pbc::UsageError& e)
-  {
-    std::cerr << "validate_gap: " << e.what() << "\n" << cli.usage();
-    return 2;
-  }
   if (opt.bench_hours > 0)
   {
     // Speed: a sea recording of bench_hours at 100 Hz with a withheld vibration, diagnosed
@@ -691,13 +667,13 @@ int main(int argc, char** argv)
      << " (>= 90 % of detectable cases named, median shrink >= 70 %, no confident verdict without a "
         "withheld effect)\n";
   std::cout << md.str();
-  if (!opt.md.empty())
+  if (md_file)
   {
-    std::ofstream(opt.md) << md.str();
+    md_file->commit(md.str());
   }
-  if (!opt.json.empty())
+  if (json_file)
   {
-    std::ofstream j(opt.json);
+    std::ostringstream j;
     j << "{\"accuracy\": " << accuracy << ", \"median_shrink\": " << median_shrink << ", \"null_confident\": "
       << null_confident << ", \"cases\": [\n";
     for (std::size_t i = 0; i < results.size(); ++i)
@@ -710,6 +686,56 @@ int main(int argc, char** argv)
         << ", \"effect_max_z\": " << c.effect_max_z << "}";
     }
     j << "\n]}\n";
+    json_file->commit(j.str());
   }
   return pass ? 0 : 3;
+}
+}  // namespace
+
+int main(int argc, char** argv)
+{
+  Options opt;
+  pbc::CommandLine cli(
+      "usage: validate_gap [--small] [--seeds N] [--duration S] [--rate HZ] [--md FILE] [--json FILE]\n"
+      "                    [--quiet] [--verbose] [--effect NAME] [--motion NAME] [--bench-hours H]\n"
+      "Withholds each named effect from a simulated 'real' recording, diagnoses the gap against the\n"
+      "scenario without it and scores the verdicts (docs/gap.md). --bench-hours H times one diagnosis\n"
+      "of H hours of 100 Hz data instead.\n");
+  cli.flag("--small", &opt.small)
+      .integer("--seeds", &opt.seeds)
+      .number("--duration", &opt.duration)
+      .number("--rate", &opt.rate)
+      .text("--md", &opt.md)
+      .text("--json", &opt.json)
+      .flag("--quiet", &opt.quiet)
+      .flag("--verbose", &opt.verbose)
+      .text("--effect", &opt.only_effect)
+      .text("--motion", &opt.only_motion)
+      .number("--bench-hours", &opt.bench_hours);
+  try
+  {
+    if (!cli.parse(argc, argv))
+      return 0;
+    pbc::refuseOverwritingInputs({}, { { "--md", opt.md }, { "--json", opt.json } });
+  }
+  catch (const pbc::UsageError& e)
+  {
+    std::cerr << "validate_gap: " << e.what() << "\n" << cli.usage();
+    return 2;
+  }
+  try
+  {
+    // Created before the run: an output that cannot be written is said at once.
+    std::optional<pbc::OutputFile> md_file, json_file;
+    if (!opt.md.empty())
+      md_file.emplace(opt.md);
+    if (!opt.json.empty())
+      json_file.emplace(opt.json);
+    return validate(opt, md_file ? &*md_file : nullptr, json_file ? &*json_file : nullptr);
+  }
+  catch (const std::exception& e)
+  {
+    std::cerr << "validate_gap: " << e.what() << "\n";
+    return 1;
+  }
 }

@@ -1,6 +1,7 @@
 // Gap diagnosis: signal-processing units against closed forms, the diagnosis on a simulated case
 // with a known withheld effect, the small form of validate_gap, the diagnose_gap command line on
-// a simulated bag and a CSV, and (when ../shared/data exists beside the repository) a real set.
+// a simulated bag and a CSV and its messages on unreadable bags, and (when ../shared/data exists
+// beside the repository) a real set.
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -14,6 +15,7 @@
 #include <set>
 #include <sstream>
 #include <string>
+#include <utility>
 
 #include <gtest/gtest.h>
 
@@ -218,6 +220,43 @@ TEST(GapTool, DiagnosesASimulatedBagAndACsv)
   // wrong command lines
   EXPECT_EQ(shell(std::string(PBC_DIAGNOSE_GAP) + " --sim " + scen).status, 2);
   EXPECT_EQ(shell(std::string(PBC_DIAGNOSE_GAP) + " --real " + dir + "/missing.bag --sim " + scen + " --out " + dir + "/x").status, 1);
+  std::error_code ec;
+  fs::remove_all(dir, ec);
+}
+
+TEST(GapTool, UnreadableBagsAreNamedAndBadCountsRefused)
+{
+  // A bag that is missing, empty or cut off (a recording ended by a power loss) is named in the
+  // message, not left to rosbag's own text; exit status 1 and no report folder.
+  const std::string dir = tempDir();
+  const std::string scen = std::string(PBC_SOURCE_DIR) + "/config/scenarios/paper_static.yaml";
+  CommandResult r = shell(std::string(PBC_SIMULATE_IMU) + " --scenario " + scen + " --duration 20 --out " + dir +
+                          "/whole.bag");
+  ASSERT_EQ(r.status, 0) << r.output;
+  const std::string bytes = readAll(dir + "/whole.bag");
+  ASSERT_GT(bytes.size(), 100000u);
+  std::ofstream(dir + "/cut.bag", std::ios::binary).write(bytes.data(), static_cast<std::streamsize>(bytes.size() / 2));
+  std::ofstream(dir + "/empty.bag").close();
+  const std::string diagnose = std::string(PBC_DIAGNOSE_GAP) + " --sim " + scen + " --out " + dir + "/out --real ";
+  for (const auto& [name, says] : { std::pair<std::string, std::string>{ "missing.bag", "does not exist" },
+                                    { "empty.bag", "is empty" },
+                                    { "cut.bag", "is truncated or corrupt" } })
+  {
+    r = shell(diagnose + dir + "/" + name);
+    EXPECT_EQ(r.status, 1) << name << ": " << r.output;
+    EXPECT_NE(r.output.find("input bag '" + dir + "/" + name + "' " + says), std::string::npos) << r.output;
+    EXPECT_FALSE(fs::exists(dir + "/out")) << name;
+  }
+  EXPECT_NE(shell(diagnose + dir + "/cut.bag").output.find("rosbag reindex"), std::string::npos);
+
+  // Counts below one are a wrong command line that names the option.
+  for (const char* option : { "--ensemble -3", "--ensemble 0", "--threads 0" })
+  {
+    r = shell(diagnose + dir + "/whole.bag " + option);
+    EXPECT_EQ(r.status, 2) << option << ": " << r.output;
+    const std::string name = std::string(option).substr(0, std::string(option).find(' '));
+    EXPECT_NE(r.output.find(name + " must be at least 1"), std::string::npos) << r.output;
+  }
   std::error_code ec;
   fs::remove_all(dir, ec);
 }

@@ -1,7 +1,8 @@
 // compensate_bag end to end, without a master: runs the installed-style binary on the simulated
 // paper bench bag and reads the bag it writes; --outputs and --compression (topics written, chunk
-// compression, identical message bytes, readable by rosbag's Python reader too); then the error
-// paths (missing input, --out equal to --in, bad parameter files, missing topic, unknown output
+// compression, identical message bytes, readable by rosbag's Python reader too); the IMU's
+// mounting from the bag's /tf_static (an IMU yawed 90 deg gives the same outputs); the batch
+// one-liner of docs/batch.md and its Slurm script over a folder of bags; then the error paths (missing input, --out equal to --in, bad parameter files, missing topic, unknown output
 // or compression): non-zero exit, a message naming the problem, and no output file.
 #include <sys/stat.h>
 
@@ -10,7 +11,9 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <functional>
 #include <iterator>
+#include <limits>
 #include <map>
 #include <string>
 #include <vector>
@@ -20,6 +23,8 @@
 #include <rosbag/bag.h>
 #include <rosbag/view.h>
 #include <sensor_msgs/Imu.h>
+#include <tf2/LinearMath/Quaternion.h>
+#include <tf2_msgs/TFMessage.h>
 
 #include "periodic_bias_compensation/BiasState.h"
 #include "../common/shell.h"
@@ -88,6 +93,119 @@ Contents readContents(const std::string& path)
     contents[topic].emplace_back(m.getTime().toNSec(), std::move(bytes));
   }
   return contents;
+}
+
+/// Writes the IMU messages of `source` (its first `seconds`) to `path`, each changed by `change`,
+/// after `tf_static` on /tf_static when it holds transforms.
+void copyImu(const std::string& source, const std::string& path, const std::function<void(sensor_msgs::Imu*)>& change,
+             const tf2_msgs::TFMessage& tf_static = {}, double seconds = std::numeric_limits<double>::infinity())
+{
+  rosbag::Bag in(source, rosbag::bagmode::Read);
+  rosbag::View imu(in, rosbag::TopicQuery(std::vector<std::string>{ "imu/data", "/imu/data" }));
+  rosbag::Bag out(path, rosbag::bagmode::Write);
+  if (!tf_static.transforms.empty())
+  {
+    out.write("/tf_static", imu.getBeginTime(), tf_static);
+  }
+  for (const rosbag::MessageInstance& m : imu)
+  {
+    if ((m.getTime() - imu.getBeginTime()).toSec() > seconds)
+    {
+      break;
+    }
+    sensor_msgs::Imu message = *m.instantiate<sensor_msgs::Imu>();
+    change(&message);
+    out.write(m.getTopic(), m.getTime(), message);
+  }
+}
+
+/// Pose of every odometry message of a bag by topic (leading '/' removed) and stamp [ns].
+struct Pose
+{
+  std::array<double, 3> position;
+  tf2::Quaternion orientation;
+};
+std::map<std::string, std::map<std::uint64_t, Pose>> readPoses(const std::string& path)
+{
+  std::map<std::string, std::map<std::uint64_t, Pose>> poses;
+  rosbag::Bag bag(path, rosbag::bagmode::Read);
+  for (const rosbag::MessageInstance& m : rosbag::View(bag))
+  {
+    if (const auto odom = m.instantiate<nav_msgs::Odometry>())
+    {
+      const auto& p = odom->pose.pose.position;
+      const auto& q = odom->pose.pose.orientation;
+      poses[m.getTopic().substr(m.getTopic().front() == '/' ? 1 : 0)][odom->header.stamp.toNSec()] =
+          Pose{ { p.x, p.y, p.z }, tf2::Quaternion(q.x, q.y, q.z, q.w) };
+    }
+  }
+  return poses;
+}
+
+/// Largest position difference [m] and rotation between the orientations [rad] of `topic` in
+/// two bags (infinite when their stamps differ).
+std::pair<double, double> largestDifference(const std::string& a, const std::string& b, const std::string& topic)
+{
+  const auto pa = readPoses(a)[topic], pb = readPoses(b)[topic];
+  double position = 0.0, angle = 0.0;
+  if (pa.empty() || pa.size() != pb.size())
+  {
+    return { INFINITY, INFINITY };
+  }
+  for (const auto& [stamp, pose] : pa)
+  {
+    const auto other = pb.find(stamp);
+    if (other == pb.end())
+    {
+      return { INFINITY, INFINITY };
+    }
+    const auto& p = pose.position;
+    const auto& q = other->second.position;
+    position = std::max(position, std::hypot(p[0] - q[0], p[1] - q[1], p[2] - q[2]));
+    angle = std::max(angle, 2.0 * std::acos(std::min(1.0, std::abs(pose.orientation.dot(other->second.orientation)))));
+  }
+  return { position, angle };
+}
+
+/// The bench bag's IMU as if mounted yawed by 90 deg about base_link's z: its frame imu_yawed,
+/// whose axes are base_link's turned by +90 deg; with that transform on /tf_static if asked.
+std::string yawedImuBag(const std::string& path, bool with_tf_static)
+{
+  tf2::Quaternion base_from_imu;
+  base_from_imu.setRPY(0.0, 0.0, M_PI / 2);
+  tf2_msgs::TFMessage tf_static;
+  if (with_tf_static)
+  {
+    geometry_msgs::TransformStamped t;
+    t.header.frame_id = "base_link";
+    t.child_frame_id = "imu_yawed";
+    t.transform.rotation.x = base_from_imu.x();
+    t.transform.rotation.y = base_from_imu.y();
+    t.transform.rotation.z = base_from_imu.z();
+    t.transform.rotation.w = base_from_imu.w();
+    tf_static.transforms.push_back(t);
+  }
+  const auto toImu = [&base_from_imu](geometry_msgs::Vector3* v) {
+    const tf2::Vector3 r = tf2::quatRotate(base_from_imu.inverse(), tf2::Vector3(v->x, v->y, v->z));
+    v->x = r.x();
+    v->y = r.y();
+    v->z = r.z();
+  };
+  copyImu(PBC_BENCH_BAG, path,
+          [&](sensor_msgs::Imu* m) {
+            m->header.frame_id = "imu_yawed";
+            toImu(&m->linear_acceleration);
+            toImu(&m->angular_velocity);
+            auto& q = m->orientation;
+            const tf2::Quaternion level_from_imu =
+                tf2::Quaternion(q.x, q.y, q.z, q.w) * base_from_imu;  // level <- base <- imu
+            q.x = level_from_imu.x();
+            q.y = level_from_imu.y();
+            q.z = level_from_imu.z();
+            q.w = level_from_imu.w();
+          },
+          tf_static);
+  return path;
 }
 
 /// The compression named in each chunk header of a bag file ("compression=NAME" fields).
@@ -295,9 +413,124 @@ TEST_F(CompensateBag, TuneGainsRefusesToOverwriteTheOutput)
 {
   const std::string out = dir_ + "/out.bag";
   const CommandResult r = run(std::string("--in ") + PBC_BENCH_BAG + " --out " + out + " --tune-gains " + out);
-  EXPECT_EQ(r.status, 1);
-  EXPECT_NE(r.output.find("--tune-gains must differ"), std::string::npos) << r.output;
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.output.find("--tune-gains '" + out + "' is the same file as --out"), std::string::npos) << r.output;
   expectNothingWritten(out);
+}
+
+TEST_F(CompensateBag, MountingFromTfStaticGivesTheAlignedOutputs)
+{
+  // The bench bag's IMU is in imu_link, aligned with base_link (no transform in the bag).
+  const std::string aligned = dir_ + "/aligned.bag";
+  CommandResult r = run(std::string("--in ") + PBC_BENCH_BAG + " --out " + aligned);
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("no imu_link -> base_link transform in the bag: taken as aligned"), std::string::npos)
+      << r.output;
+
+  const std::string yawed = yawedImuBag(dir_ + "/yawed.bag", true);
+  const std::string compensated = dir_ + "/yawed_out.bag";
+  r = run("--in " + yawed + " --out " + compensated);
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("mounting: imu_yawed -> base_link from /tf_static, rpy 0 0 1.571 rad"), std::string::npos)
+      << r.output;
+  for (const char* topic : { "odometry/filtered", "odometry/wave" })
+  {
+    const auto [position, angle] = largestDifference(aligned, compensated, topic);
+    std::printf("[compensate_bag] IMU yawed 90 deg with /tf_static: %s differs by up to %.2e m, %.2e rad\n", topic,
+                position, angle);
+    EXPECT_LT(position, 1e-3) << topic;
+    EXPECT_LT(angle, 0.01) << topic;
+  }
+}
+
+TEST_F(CompensateBag, MountingWithoutTransformOrWithIdentityMountingIsAligned)
+{
+  const std::string aligned = dir_ + "/aligned.bag";
+  CommandResult r = run(std::string("--in ") + PBC_BENCH_BAG + " --out " + aligned + " --outputs filtered");
+  ASSERT_EQ(r.status, 0) << r.output;
+
+  // The same yawed IMU without /tf_static: taken as aligned, so its outputs are turned.
+  const std::string untold = yawedImuBag(dir_ + "/untold.bag", false);
+  r = run("--in " + untold + " --out " + dir_ + "/untold_out.bag --outputs filtered");
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("no imu_yawed -> base_link transform in the bag: taken as aligned"), std::string::npos)
+      << r.output;
+  EXPECT_GT(largestDifference(aligned, dir_ + "/untold_out.bag", "odometry/filtered").second, 1.0);
+
+  // identity_mounting: true skips the lookup, also with the transform in the bag.
+  const std::string told = yawedImuBag(dir_ + "/told.bag", true);
+  r = run("--in " + told + " --out " + dir_ + "/told_out.bag --outputs filtered --params " +
+          writeFile("identity.yaml", "identity_mounting: true\n"));
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("mounting: identity_mounting: imu_yawed taken as aligned with base_link"), std::string::npos)
+      << r.output;
+  EXPECT_GT(largestDifference(aligned, dir_ + "/told_out.bag", "odometry/filtered").second, 1.0);
+}
+
+/// The line of docs/batch.md's code blocks that runs `tool` through GNU parallel ("" if none).
+std::string documentedParallelLine(const std::string& tool)
+{
+  std::ifstream doc(std::string(PBC_SOURCE_DIR) + "/docs/batch.md");
+  for (std::string line; std::getline(doc, line);)
+  {
+    if (line.rfind("    ", 0) == 0 && line.find(" parallel ") != std::string::npos &&
+        line.find(" " + tool + " ") != std::string::npos)
+    {
+      return line.substr(4);
+    }
+  }
+  return "";
+}
+
+TEST_F(CompensateBag, DocumentedBatchRunsOverAFolderOfBags)
+{
+  if (shell("command -v parallel").status != 0)
+  {
+    GTEST_SKIP() << "GNU parallel is not installed (Debian package parallel, scripts/setup): the one-liner of "
+                    "docs/batch.md is not run";
+  }
+  std::string line = documentedParallelLine("compensate_bag");
+  ASSERT_FALSE(line.empty()) << "no parallel ... compensate_bag line in docs/batch.md";
+  // The tool built here (rosrun finds the same one when the workspace is sourced).
+  const std::string rosrun = "rosrun periodic_bias_compensation compensate_bag";
+  ASSERT_NE(line.find(rosrun), std::string::npos) << line;
+  line.replace(line.find(rosrun), rosrun.size(), PBC_COMPENSATE_BAG);
+  const auto keep = [](sensor_msgs::Imu*) {};
+  ASSERT_EQ(std::system(("mkdir -p " + dir_ + "/bags " + dir_ + "/mixed").c_str()), 0);
+  copyImu(PBC_BENCH_BAG, dir_ + "/bags/first.bag", keep, {}, 10.0);
+  copyImu(PBC_BENCH_BAG, dir_ + "/bags/second.bag", keep, {}, 10.0);
+  CommandResult r = shell("cd " + dir_ + "/bags && " + line);
+  EXPECT_EQ(r.status, 0) << line << "\n" << r.output;
+  EXPECT_TRUE(exists(dir_ + "/bags/compensated/first.bag")) << r.output;
+  EXPECT_TRUE(exists(dir_ + "/bags/compensated/second.bag")) << r.output;
+
+  // A broken bag among them: parallel's status counts the failed job, the joblog has its status 1.
+  copyImu(PBC_BENCH_BAG, dir_ + "/mixed/good.bag", keep, {}, 10.0);
+  writeFile("mixed/broken.bag", "#ROSBAG V2.0\n");
+  r = shell("cd " + dir_ + "/mixed && " + line);
+  EXPECT_EQ(r.status, 1) << r.output;
+  EXPECT_TRUE(exists(dir_ + "/mixed/compensated/good.bag"));
+  EXPECT_FALSE(exists(dir_ + "/mixed/compensated/broken.bag"));
+  const CommandResult exitvals = shell("cut -f7,9 " + dir_ + "/mixed/compensated/joblog.tsv | sort");
+  EXPECT_NE(exitvals.output.find("1\t" + std::string(PBC_COMPENSATE_BAG) + " --in broken.bag"), std::string::npos)
+      << exitvals.output;
+
+  // The Slurm array script, run as task 1 would be (the second bag in file-name order).
+  const std::string setup = std::string(PBC_CATKIN_DEVEL) + "/setup.bash";
+  if (exists(setup))
+  {
+    const auto task = [&](int id) {
+      return shell("cd " + dir_ + "/bags && PBC_WS=" + PBC_CATKIN_DEVEL + "/.. SLURM_ARRAY_TASK_ID=" +
+                   std::to_string(id) + " bash " + PBC_SOURCE_DIR + "/scripts/slurm_compensate_bags slurm");
+    };
+    r = task(1);
+    EXPECT_EQ(r.status, 0) << r.output;
+    EXPECT_TRUE(exists(dir_ + "/bags/slurm/second.bag")) << r.output;
+    EXPECT_FALSE(exists(dir_ + "/bags/slurm/first.bag"));
+    r = task(2);
+    EXPECT_EQ(r.status, 2) << r.output;
+    EXPECT_NE(r.output.find("holds 2 bags"), std::string::npos) << r.output;
+  }
 }
 
 TEST_F(CompensateBag, MissingInputFails)

@@ -1,6 +1,6 @@
-// Wrapper pieces without a master: Imu -> ImuSample with a mounting rotation, Odometry
-// covariances (never -1, unknown -> kUnknownCovariance), finite checks, the frame filter, the
-// parameter table read from YAML (unknown key, wrong type, invalid value named), and the raw
+// Wrapper pieces without a master: Imu -> ImuSample with a mounting rotation, the mounting
+// looked up in a tf2 buffer (node and compensate_bag), Odometry covariances (never -1, unknown ->
+// kUnknownCovariance), finite checks, the frame filter, the parameter table read from YAML (unknown key, wrong type, invalid value named), and the raw
 // double integration.
 #include <cmath>
 #include <cstdio>
@@ -11,6 +11,7 @@
 #include <gtest/gtest.h>
 
 #include "periodic_bias_compensation/ros/conversions.h"
+#include "periodic_bias_compensation/ros/mounting.h"
 #include "periodic_bias_compensation/ros/parameters.h"
 #include "periodic_bias_compensation/ros/raw_integrator.h"
 
@@ -81,6 +82,40 @@ TEST(Conversions, NoOrientationAndNonFinitePassThrough)
   const ImuSample s = toImuSample(msg, Mounting());
   EXPECT_FALSE(s.has_orientation);
   EXPECT_TRUE(std::isnan(s.specific_force.y())) << "the core must see the NaN to reject and count it";
+}
+
+TEST(Mounting, LookedUpAsTheNodeAndCompensateBagUseIt)
+{
+  RosOptions options;  // base_frame base_link
+  tf2::BufferCore tf;
+  MountingLookup lookup = lookupMounting(tf, "imu_link", options);
+  EXPECT_EQ(lookup.source, MountingSource::kMissing);
+  EXPECT_FALSE(lookup.why.empty());
+  EXPECT_TRUE(lookup.mounting.imu_to_base.isApprox(Quaternion::Identity()));
+
+  // base_link -> mast -> imu_link: 90 deg about z, then the identity.
+  geometry_msgs::TransformStamped base_mast, mast_imu;
+  base_mast.header.frame_id = "base_link";
+  base_mast.child_frame_id = "mast";
+  base_mast.transform.rotation.z = std::sin(M_PI / 4.0);
+  base_mast.transform.rotation.w = std::cos(M_PI / 4.0);
+  mast_imu.header.frame_id = "mast";
+  mast_imu.child_frame_id = "imu_link";
+  mast_imu.transform.rotation.w = 1.0;
+  mast_imu.transform.translation.z = 12.0;  // lever arm: not used
+  ASSERT_TRUE(tf.setTransform(base_mast, "test", true));
+  ASSERT_TRUE(tf.setTransform(mast_imu, "test", true));
+  lookup = lookupMounting(tf, "imu_link", options);
+  ASSERT_EQ(lookup.source, MountingSource::kTransform) << lookup.why;
+  EXPECT_TRUE(lookup.mounting.imu_to_base.isApprox(yawed90().imu_to_base, 1e-12));
+  EXPECT_EQ(describeMounting(lookup.mounting), "rpy 0 0 1.571 rad");
+
+  // No lookup: the IMU's frame is the base frame, or identity_mounting.
+  EXPECT_EQ(lookupMounting(tf, "base_link", options).source, MountingSource::kNotNeeded);
+  options.identity_mounting = true;
+  lookup = lookupMounting(tf, "imu_link", options);
+  EXPECT_EQ(lookup.source, MountingSource::kNotNeeded);
+  EXPECT_TRUE(lookup.mounting.imu_to_base.isApprox(Quaternion::Identity()));
 }
 
 TEST(Conversions, OdometryCovariancesAndFrames)

@@ -26,6 +26,14 @@ struct UsageError : std::runtime_error
   using std::runtime_error::runtime_error;
 };
 
+/// Throws UsageError "NAME must be at least MIN, got VALUE" when value < minimum.
+template <typename Integer>
+void requireAtLeast(const std::string& name, Integer value, Integer minimum)
+{
+  if (value < minimum)
+    throw UsageError(name + " must be at least " + std::to_string(minimum) + ", got " + std::to_string(value));
+}
+
 class CommandLine
 {
 public:
