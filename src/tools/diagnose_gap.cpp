@@ -417,9 +417,9 @@ int main(int argc, char** argv)
   try
   {
     scenario = sim::loadScenario(o.scenario);
-    // Before the reading and the diagnosis: a directory that cannot be written is said at once.
-    periodic_bias_compensation::prepareOutputDirectory(o.out);
     real = o.real.empty() ? readCsv(o) : readBag(o);
+    // Before the diagnosis: a directory that cannot be written is said at once.
+    periodic_bias_compensation::prepareOutputDirectory(o.out);
   }
   catch (const gap::CsvOptionError& e)
   {
