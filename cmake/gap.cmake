@@ -2,6 +2,7 @@
 # and the end-to-end test that every shipped scenario's bag is consumed by compensate_bag.
 add_library(${PROJECT_NAME}_gap
   src/gap/signal.cpp
+  src/gap/motion.cpp
   src/gap/csv.cpp
   src/gap/features.cpp
   src/gap/fit.cpp
@@ -35,7 +36,7 @@ if(CATKIN_ENABLE_TESTING)
 
   # Gap library units, diagnosis on simulated cases, validate_gap --small, the CLI on a bag and
   # a CSV, and one real set when ../shared/data exists beside the repository (skipped otherwise).
-  catkin_add_gtest(test_gap test/gap/test_gap.cpp test/gap/test_csv.cpp TIMEOUT 900)
+  catkin_add_gtest(test_gap test/gap/test_gap.cpp test/gap/test_csv.cpp test/gap/test_motion_stage.cpp TIMEOUT 900)
   target_link_libraries(test_gap ${PROJECT_NAME}_gap)
   target_compile_definitions(test_gap PRIVATE
     PBC_VALIDATE_GAP="$<TARGET_FILE:validate_gap>"

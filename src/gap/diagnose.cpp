@@ -178,7 +178,7 @@ Report diagnose(const Recording& real_in, const sim::Scenario& scenario_in, cons
   {
     throw std::runtime_error("recording too short for a diagnosis (" + std::to_string(real.size()) + " samples)");
   }
-  const sim::Scenario scenario = matchScenario(scenario_in, real);
+  sim::Scenario scenario = matchScenario(scenario_in, real);
   sim::validateScenario(scenario);
   rep.real_source = real.source;
   rep.scenario_name = scenario.name;
@@ -195,7 +195,8 @@ Report diagnose(const Recording& real_in, const sim::Scenario& scenario_in, cons
   std::vector<std::vector<double>> truth_members(truth ? M : 0);
   std::vector<Eigen::MatrixXd> truth_runs(truth ? M : 0);
   // Plot curves of the base runs (withheld part) are taken on the way.
-  const std::size_t n_held = sliceFraction(real, opt.fit_fraction, 1.0).size();
+  const Recording real_held = sliceFraction(real, opt.fit_fraction, 1.0);
+  const std::size_t n_held = real_held.size();
   const int nseg = welchSegment(n_held);
   std::vector<int> ms;
   for (int m = 1; static_cast<std::size_t>(m) * 10 <= n_held; m *= 2)
@@ -205,18 +206,58 @@ Report diagnose(const Recording& real_in, const sim::Scenario& scenario_in, cons
   std::vector<Curves> cb(M);
   std::vector<std::vector<double>> stage_members(M);
   std::vector<Recording> base(M);
-  parallelFor(M, opt.threads, [&](int i) {
-    base[i] = simulateRecording(scenario, seedOf(i), truth);
-    base[i].rate = real.rate;
-    cb[i] = curvesOf(base[i], opt.fit_fraction, real.rate, nseg, ms);
-    if (truth)
+  const auto simulateBase = [&]() {
+    parallelFor(M, opt.threads, [&](int i) {
+      base[i] = simulateRecording(scenario, seedOf(i), truth);
+      base[i].rate = real.rate;
+      cb[i] = curvesOf(base[i], opt.fit_fraction, real.rate, nseg, ms);
+      if (truth)
+      {
+        const Eigen::MatrixXd res = truthResidual(base[i], scenario.gravity, opt.truth_smooth);
+        truth_members[i] = truthFeatures(res, opt.truth_segments);
+        truth_runs[i] = blockMeans(res, truth_blocks);
+        base[i].truth = TruthTrack();
+      }
+    });
+  };
+  simulateBase();
+  const bool orient = real.has_orientation;
+  const bool temp = real.has_temperature && scenario.temperature.enabled;
+  rep.layout_held = makeLayout(real.rate, n_held, orient, temp);
+  rep.real_held = computeFeatures(real_held, rep.layout_held);
+
+  // 0. Motion: a tilt, heading or sea state of its own is fitted before any sensor effect; the
+  // fit that brings the withheld part closest becomes the scenario of the base ensemble.
+  const auto heldGap = [&](const std::vector<Recording>& runs) {
+    std::vector<std::vector<double>> members(runs.size());
+    parallelFor(static_cast<int>(runs.size()), opt.threads, [&](int i) {
+      members[i] = computeFeatures(sliceFraction(runs[i], opt.fit_fraction, 1.0), rep.layout_held);
+    });
+    return gapOf(zScores(rep.real_held, ensembleStats(members, rep.layout_held)));
+  };
+  rep.motion = fitMotion(real, scenario, base);
+  if (rep.motion.differs)
+  {
+    rep.motion.gap_before = heldGap(base);
+    double best = rep.motion.gap_before;
+    for (const MotionCandidate& candidate : rep.motion.candidates)
     {
-      const Eigen::MatrixXd res = truthResidual(base[i], scenario.gravity, opt.truth_smooth);
-      truth_members[i] = truthFeatures(res, opt.truth_segments);
-      truth_runs[i] = blockMeans(res, truth_blocks);
-      base[i].truth = TruthTrack();
+      std::vector<Recording> runs(M);
+      parallelFor(M, opt.threads, [&](int i) { runs[i] = simulateRecording(candidate.scenario, seedOf(i)); });
+      const double gap = heldGap(runs);
+      if (gap < best)
+      {
+        best = gap;
+        rep.motion.adopted = candidate.what;
+        rep.motion.fitted = candidate.scenario;
+      }
     }
-  });
+    if (!rep.motion.adopted.empty())
+    {
+      scenario = rep.motion.fitted;
+      simulateBase();
+    }
+  }
   {
     // The compensator's pipeline stages on the real recording against the same on every run.
     // One run at a time: the core plans FFTW transforms, and FFTW planning is not thread-safe.
@@ -235,8 +276,6 @@ Report diagnose(const Recording& real_in, const sim::Scenario& scenario_in, cons
     rep.truth_where = rankDepartures(truthFeatures(res, opt.truth_segments), ensembleStats(truth_members, tl), tl);
     rep.truth_csv = "channel,t,real,sim_lo,sim_med,sim_hi\n" + blockCsv(blockMeans(res, truth_blocks), truth_runs, rep.duration);
   }
-  const bool orient = real.has_orientation;
-  const bool temp = real.has_temperature && scenario.temperature.enabled;
 
   // 1. Where: whole recording.
   rep.layout_all = makeLayout(real.rate, real.size(), orient, temp);
@@ -265,9 +304,6 @@ Report diagnose(const Recording& real_in, const sim::Scenario& scenario_in, cons
 
   // 2. Withheld part: layout, base ensemble.
   const Recording real_fit = sliceFraction(real, 0.0, opt.fit_fraction);
-  const Recording real_held = sliceFraction(real, opt.fit_fraction, 1.0);
-  rep.layout_held = makeLayout(real.rate, real_held.size(), orient, temp);
-  rep.real_held = computeFeatures(real_held, rep.layout_held);
   std::vector<Recording> base_fit(M);
   rep.ens_held_members.resize(M);
   parallelFor(M, opt.threads, [&](int i) {
@@ -278,6 +314,11 @@ Report diagnose(const Recording& real_in, const sim::Scenario& scenario_in, cons
   rep.ens_held = ensembleStats(rep.ens_held_members, rep.layout_held);
   const std::vector<double> z_before = zScores(rep.real_held, rep.ens_held);
   rep.gap_before = gapOf(z_before);
+  rep.motion.gap_after = rep.gap_before;
+  if (rep.motion.adopted.empty())
+  {
+    rep.motion.gap_before = rep.gap_before;
+  }
   std::vector<double> null_gaps;
   for (int i = 0; i < M; ++i)
   {
@@ -586,6 +627,30 @@ Report diagnose(const Recording& real_in, const sim::Scenario& scenario_in, cons
   return rep;
 }
 
+namespace
+{
+std::string motionSummaryJson(const MotionSummary& m)
+{
+  std::ostringstream o;
+  o << "{\"roll\": " << num(m.roll) << ", \"pitch\": " << num(m.pitch) << ", \"heading\": "
+    << (std::isfinite(m.heading) ? num(m.heading) : std::string("null")) << ", \"wave_height\": " << num(m.wave_height)
+    << ", \"peak_period\": " << num(m.peak_period) << "}";
+  return o.str();
+}
+
+std::string motionJson(const MotionFit& m)
+{
+  std::ostringstream o;
+  o << "{\"differs\": " << (m.differs ? "true" : "false") << ", \"adopted\": " << str(m.adopted)
+    << ",\n    \"real\": " << motionSummaryJson(m.real) << ",\n    \"scenario\": " << motionSummaryJson(m.scenario)
+    << ",\n    \"findings\": [";
+  for (std::size_t i = 0; i < m.findings.size(); ++i)
+    o << (i ? ", " : "") << str(m.findings[i]);
+  o << "], \"gap_before\": " << num(m.gap_before) << ", \"gap_after\": " << num(m.gap_after) << "}";
+  return o.str();
+}
+}  // namespace
+
 std::string reportJson(const Report& r)
 {
   std::ostringstream o;
@@ -593,6 +658,7 @@ std::string reportJson(const Report& r)
   o << "  \"real\": {\"source\": " << str(r.real_source) << ", \"rate_hz\": " << num(r.rate)
     << ", \"duration_s\": " << num(r.duration) << ", \"samples\": " << r.samples << "},\n";
   o << "  \"scenario\": " << str(r.scenario_name) << ",\n";
+  o << "  \"motion\": " << motionJson(r.motion) << ",\n";
   o << "  \"gap_metric\": \"rms over features of log(1 + max(0, |z| - 3)), z = (real - ensemble median) / ensemble spread\",\n";
   o << "  \"gap_all\": " << num(r.gap_all) << ", \"null_gap_all\": " << num(r.null_gap) << ",\n";
   o << "  \"where\": [";
@@ -648,6 +714,12 @@ std::string reportSummary(const Report& r)
   std::snprintf(buf, sizeof(buf), "diagnose_gap: %s vs scenario '%s': %zu samples, %.6g Hz, %.1f s\n",
                 r.real_source.c_str(), r.scenario_name.c_str(), r.samples, r.rate, r.duration);
   o << buf;
+  std::snprintf(buf, sizeof(buf), "MOTION: %s; fitted: %s (withheld gap %.3g against the scenario as given, %.3g fitted)\n",
+                r.motion.differs ? "differs" : "as the scenario's", r.motion.adopted.empty() ? "nothing" : r.motion.adopted.c_str(),
+                r.motion.gap_before, r.motion.gap_after);
+  o << buf;
+  for (const std::string& finding : r.motion.findings)
+    o << "  " << finding << "\n";
   std::snprintf(buf, sizeof(buf), "WHERE (whole recording): gap %.3g (ensemble member vs rest: up to %.3g), %zu departures; largest:\n",
                 r.gap_all, r.null_gap, r.where.size());
   o << buf;

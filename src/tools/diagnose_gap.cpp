@@ -283,6 +283,25 @@ std::string reportMarkdown(const gap::Report& rep, const Options& o, bool plots)
   md << "## Verdict\n\n**" << rep.verdict_effect << "** (confidence " << rep.confidence << ", shrink on the withheld part "
      << static_cast<int>(std::lround(100 * rep.shrink_withheld)) << " %): " << rep.verdict_text << "\n\nparams: `"
      << rep.verdict_params << "`\n\n";
+  md << "## 0. Motion (before any sensor effect)\n\n";
+  const gap::MotionFit& m = rep.motion;
+  if (!m.differs)
+    md << "The recording's motion is the scenario's (tilt, heading, sea state within the ensemble's spread).\n\n";
+  else if (m.adopted.empty())
+    md << "The recording's motion **differs** from the scenario's; no fit of it brought the withheld part closer, so "
+          "sensor effects below are judged against the scenario as given.\n\n";
+  else
+    md << "The recording's motion **differs** from the scenario's; sensor effects below are judged against the "
+          "scenario with the recording's " << m.adopted << " (`fitted_scenario.yaml` carries it).\n\n";
+  for (const std::string& finding : m.findings)
+    md << "- " << finding << "\n";
+  std::snprintf(buf, sizeof(buf),
+                "%s| | roll [rad] | pitch [rad] | heave Hs [m] | peak period [s] |\n|---|---|---|---|---|\n"
+                "| recording | %+.4f | %+.4f | %.3g | %.3g |\n| scenario (ensemble mean) | %+.4f | %+.4f | %.3g | %.3g |\n\n"
+                "Withheld gap against the scenario as given %.3g, against the fitted one %.3g.\n\n",
+                m.findings.empty() ? "" : "\n", m.real.roll, m.real.pitch, m.real.wave_height, m.real.peak_period,
+                m.scenario.roll, m.scenario.pitch, m.scenario.wave_height, m.scenario.peak_period, m.gap_before, m.gap_after);
+  md << buf;
   md << "## 1. Where (whole recording)\n\n";
   std::snprintf(buf, sizeof(buf), "gap %.3g; one ensemble member against the others: up to %.3g. Departures (|z| > 3), largest first:\n\n", rep.gap_all, rep.null_gap);
   md << buf << "| axis | quantity | band / tau | segment | stage | real | sim (median) | z |\n|---|---|---|---|---|---|---|---|\n";
@@ -446,6 +465,7 @@ int main(int argc, char** argv)
     };
     std::vector<Step> steps;
     sim::Scenario model = scenario;
+    model.motion = rep.motion.fitted.motion;  // the motion fitted once; effects added step by step
     const gap::Report* cur = &rep;
     gap::Report next;
     for (int k = 0; k < o.steps; ++k)

@@ -6,6 +6,7 @@
 #pragma once
 
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <functional>
 #include <string>
@@ -264,6 +265,53 @@ struct Candidate
   std::vector<double> z_after;                 ///< withheld z-scores with the effect
 };
 
+// ---------------------------------------------------------------------------------------------
+// Motion stage: the recording's motion against the scenario's, before any sensor effect
+
+/// The motion of one recording, as the diagnosis compares it.
+struct MotionSummary
+{
+  double roll = 0.0;          ///< standing tilt from the mean specific force, sensor frame [rad]
+  double pitch = 0.0;         ///< [rad]
+  double heading = NAN;       ///< mean heading from the reported orientation (NaN without) [rad]
+  double wave_height = 0.0;   ///< 4 sqrt(m0) of the heave in the 2-25 s band [m]
+  double peak_period = 0.0;   ///< period of the heave spectrum's peak in that band [s] (0: none)
+};
+
+/// Heave from the vertical specific force (through the reported orientation when there is one,
+/// else along the mean force): its Welch spectrum (segments of a quarter of the recording, 100 to
+/// 400 s) divided by (2 pi f)^4; the peak interpolated between bins.
+MotionSummary summariseMotion(const Recording& recording);
+
+/// A motion fitted to the recording, to be tried on the withheld part.
+struct MotionCandidate
+{
+  std::string what;         ///< "tilt and heading", "sea state", or both
+  sim::Scenario scenario;   ///< the scenario with it
+};
+
+/// The recording's motion against the ensemble's, and the scenario fitted to it.
+struct MotionFit
+{
+  bool differs = false;         ///< a tilt, heading or sea state beyond the ensemble's spread
+  MotionSummary real;           ///< the recording's
+  MotionSummary scenario;       ///< the ensemble's mean
+  std::vector<std::string> findings;  ///< one line per difference, in words
+  std::vector<MotionCandidate> candidates;  ///< fits to try, the whole one first
+  std::string adopted;          ///< the candidate that brought the withheld part closest ("" none)
+  sim::Scenario fitted;         ///< the scenario with the adopted candidate (as given without)
+  double gap_before = 0.0;      ///< withheld gap against the scenario as given
+  double gap_after = 0.0;       ///< against `fitted` (equal when nothing is adopted)
+};
+
+/// Compares the recording with runs of the scenario (same duration and rate). A standing tilt
+/// beyond 0.005 rad becomes a candidate roll/pitch (a trim, list or mounting, not a sensor
+/// mean); a heading beyond 0.05 rad a candidate heading (not for routes); a heave Hs or peak
+/// period 15 % and three ensemble spreads off a candidate sea, every wave system's height and
+/// period rescaled alike. `fitted` is left as given: the caller adopts a candidate (diagnose:
+/// the one that brings the withheld part closest, if any does).
+MotionFit fitMotion(const Recording& real, const sim::Scenario& scenario, const std::vector<Recording>& runs);
+
 /// Directly visible effect (stamps, lattice, clipping, gaps).
 struct DirectDetection
 {
@@ -276,6 +324,7 @@ struct Report
 {
   std::string real_source;
   std::string scenario_name;
+  MotionFit motion;  ///< the motion stage; sensor effects are judged against motion.fitted
   double rate = 0.0;
   double duration = 0.0;
   std::size_t samples = 0;

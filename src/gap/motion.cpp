@@ -1,0 +1,243 @@
+// The motion stage of the diagnosis: the recording's standing tilt, heading and sea state
+// against the scenario's, and the scenario refitted to them before any sensor effect is judged.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+#include "periodic_bias_compensation/gap/gap.h"
+
+namespace periodic_bias_compensation::gap
+{
+namespace
+{
+/// The wave band of the sea-state estimate [Hz]: periods of 2 to 25 s.
+constexpr double kWaveBandLow = 0.04;
+constexpr double kWaveBandHigh = 0.5;
+/// Segments of the heave spectrum [s]: a quarter of the recording, from four times the longest
+/// wave period of the band to 400 s (0.0025 Hz bins for a long swell).
+constexpr double kMinWaveSegment = 100.0;
+constexpr double kMaxWaveSegment = 400.0;
+/// Below this the recording holds no sea worth a comparison [m].
+constexpr double kMinWaveHeight = 0.05;
+/// A quantity differs when the relative difference exceeds this and three ensemble spreads.
+constexpr double kSeaTolerance = 0.15;
+/// A standing tilt or heading differs beyond this and three ensemble spreads [rad].
+constexpr double kAngleTolerance = 0.005;
+constexpr double kHeadingTolerance = 0.05;
+
+double wrap(double angle)
+{
+  return std::atan2(std::sin(angle), std::cos(angle));
+}
+
+struct Spread
+{
+  double mean = 0.0;
+  double sd = 0.0;
+};
+
+template <class F>
+Spread spreadOf(const std::vector<MotionSummary>& runs, F quantity)
+{
+  Spread s;
+  for (const MotionSummary& m : runs)
+    s.mean += quantity(m);
+  s.mean /= std::max<std::size_t>(runs.size(), 1);
+  for (const MotionSummary& m : runs)
+    s.sd += std::pow(quantity(m) - s.mean, 2);
+  s.sd = runs.size() > 1 ? std::sqrt(s.sd / (runs.size() - 1)) : 0.0;
+  return s;
+}
+
+std::string format(const char* pattern, double a, double b)
+{
+  char text[200];
+  std::snprintf(text, sizeof text, pattern, a, b);
+  return text;
+}
+
+bool hasSea(const sim::Scenario& s)
+{
+  return (s.motion.type == sim::MotionType::kSea || s.motion.type == sim::MotionType::kRoute) &&
+         !s.motion.sea.systems.empty();
+}
+}  // namespace
+
+MotionSummary summariseMotion(const Recording& r)
+{
+  MotionSummary m;
+  const Eigen::Index n = r.data.rows();
+  if (n < 2)
+    return m;
+  // Standing tilt: the mean specific force in the sensor frame is gravity's up direction.
+  const Eigen::Vector3d mean_force = r.data.leftCols(3).colwise().mean().transpose();
+  m.roll = std::atan2(mean_force.y(), mean_force.z());
+  m.pitch = std::atan2(-mean_force.x(), std::hypot(mean_force.y(), mean_force.z()));
+  // Vertical specific force: through the reported orientation when there is one, else along
+  // the mean force; gravity (its mean) taken off.
+  const bool oriented = r.has_orientation && r.orientation.size() == static_cast<std::size_t>(n);
+  const Eigen::Vector3d up = mean_force.normalized();
+  Eigen::VectorXd vertical(n);
+  Eigen::Vector2d heading = Eigen::Vector2d::Zero();
+  for (Eigen::Index i = 0; i < n; ++i)
+  {
+    const Eigen::Vector3d f = r.data.row(i).head<3>().transpose();
+    if (oriented)
+    {
+      vertical[i] = (r.orientation[i] * f).z();
+      const Eigen::Vector3d x_axis = r.orientation[i] * Eigen::Vector3d::UnitX();
+      heading += Eigen::Vector2d(x_axis.x(), x_axis.y());
+    }
+    else
+      vertical[i] = f.dot(up);
+  }
+  vertical.array() -= vertical.mean();
+  if (oriented)
+    m.heading = std::atan2(heading.y(), heading.x());
+  const double rate = r.rate > 0.0 ? r.rate : estimateRate(r);
+  const double duration = n / std::max(rate, 1e-9);
+  const double seconds = std::clamp(0.25 * duration, kMinWaveSegment, kMaxWaveSegment);
+  const int segment = std::min<int>(static_cast<int>(n), static_cast<int>(std::lround(seconds * rate)));
+  if (rate <= 0.0 || segment < 64 || segment * 1.0 / rate < 1.0 / kWaveBandLow)
+    return m;
+  // Heave spectrum = acceleration spectrum / (2 pi f)^4 over the wave band.
+  const Psd psd = welch(vertical, rate, segment);
+  const auto heave = [&psd](std::size_t k) { return psd.power[k] / std::pow(2.0 * M_PI * k * psd.df, 4); };
+  double m0 = 0.0;
+  std::size_t peak = 0;
+  for (std::size_t k = 1; k < psd.power.size(); ++k)
+  {
+    const double f = k * psd.df;
+    if (f < kWaveBandLow || f > kWaveBandHigh)
+      continue;
+    m0 += heave(k) * psd.df;
+    if (peak == 0 || heave(k) > heave(peak))
+      peak = k;
+  }
+  m.wave_height = 4.0 * std::sqrt(m0);
+  if (peak > 1 && peak + 1 < psd.power.size() && heave(peak) > 0.0)
+  {
+    // The peak between bins: a parabola through the log heave of the peak bin and its neighbours.
+    const double left = std::log(heave(peak - 1) + 1e-300), centre = std::log(heave(peak)),
+                 right = std::log(heave(peak + 1) + 1e-300);
+    const double curvature = left - 2.0 * centre + right;
+    const double offset = curvature < 0.0 ? std::clamp(0.5 * (left - right) / curvature, -0.5, 0.5) : 0.0;
+    m.peak_period = 1.0 / ((peak + offset) * psd.df);
+  }
+  else if (peak > 0)
+    m.peak_period = 1.0 / (peak * psd.df);
+  return m;
+}
+
+MotionFit fitMotion(const Recording& real, const sim::Scenario& scenario, const std::vector<Recording>& runs)
+{
+  MotionFit fit;
+  fit.fitted = scenario;
+  fit.real = summariseMotion(real);
+  std::vector<MotionSummary> sims;
+  for (const Recording& run : runs)
+    sims.push_back(summariseMotion(run));
+  if (sims.empty())
+    return fit;
+  const Spread roll = spreadOf(sims, [](const MotionSummary& m) { return m.roll; });
+  const Spread pitch = spreadOf(sims, [](const MotionSummary& m) { return m.pitch; });
+  const Spread height = spreadOf(sims, [](const MotionSummary& m) { return m.wave_height; });
+  const Spread period = spreadOf(sims, [](const MotionSummary& m) { return m.peak_period; });
+  fit.scenario.roll = roll.mean;
+  fit.scenario.pitch = pitch.mean;
+  fit.scenario.wave_height = height.mean;
+  fit.scenario.peak_period = period.mean;
+  const auto beyond = [](double real_value, const Spread& s, double tolerance) {
+    return std::abs(real_value - s.mean) > std::max(tolerance, 3.0 * s.sd);
+  };
+
+  sim::Scenario attitude = scenario, sea = scenario;
+  bool attitude_differs = false, sea_fittable = false;
+  // Standing tilt: a trim, a list or the mounting, not a sensor bias.
+  if (beyond(fit.real.roll, roll, kAngleTolerance) || beyond(fit.real.pitch, pitch, kAngleTolerance))
+  {
+    fit.findings.push_back(format("standing tilt: roll %+.4f, pitch %+.4f rad", fit.real.roll, fit.real.pitch) +
+                           format(" against %+.4f, %+.4f in the scenario (a trim, list or mounting)", roll.mean,
+                                  pitch.mean));
+    attitude.motion.roll += fit.real.roll - roll.mean;
+    attitude.motion.pitch += fit.real.pitch - pitch.mean;
+    attitude_differs = true;
+  }
+  if (std::isfinite(fit.real.heading))
+  {
+    const Spread heading = spreadOf(sims, [](const MotionSummary& m) { return std::isfinite(m.heading) ? m.heading : 0.0; });
+    fit.scenario.heading = heading.mean;
+    const double turn = wrap(fit.real.heading - heading.mean);
+    if (std::abs(turn) > std::max(kHeadingTolerance, 3.0 * heading.sd) && scenario.motion.type != sim::MotionType::kRoute)
+    {
+      fit.findings.push_back(format("heading %+.3f rad against %+.3f in the scenario", fit.real.heading, heading.mean));
+      attitude.motion.heading = wrap(attitude.motion.heading + turn);
+      attitude_differs = true;
+    }
+  }
+
+  // Sea state: significant height and peak period of the heave, each against the ensemble's.
+  const bool real_sea = fit.real.wave_height > kMinWaveHeight;
+  const bool scenario_sea = height.mean > kMinWaveHeight;
+  if (real_sea || scenario_sea)
+  {
+    const double height_ratio = fit.real.wave_height / std::max(height.mean, 1e-9);
+    const bool height_differs = std::abs(std::log(std::max(height_ratio, 1e-9))) > std::log1p(kSeaTolerance) &&
+                                beyond(fit.real.wave_height, height, 0.0);
+    const bool period_differs = real_sea && scenario_sea &&
+                                std::abs(fit.real.peak_period / period.mean - 1.0) > kSeaTolerance &&
+                                beyond(fit.real.peak_period, period, 0.0);
+    if (height_differs || period_differs)
+    {
+      fit.differs = true;
+      fit.findings.push_back(format("sea state: heave Hs %.3g m, peak period %.3g s", fit.real.wave_height,
+                                    fit.real.peak_period) +
+                             format(" against Hs %.3g m, %.3g s in the scenario", height.mean, period.mean));
+      if (hasSea(scenario) && real_sea && scenario_sea)
+      {
+        const double period_ratio = fit.real.peak_period / std::max(period.mean, 1e-9);
+        if (period_ratio > 1.5 && height_ratio > 1.0)
+        {
+          // A swell the scenario lacks: the heave peaks far below the scenario's waves, which
+          // keep their accelerations. A system at the recording's peak period makes up the
+          // difference in heave variance.
+          sim::WaveSystem swell = sea.motion.sea.systems.front();
+          swell.peak_period = fit.real.peak_period;
+          swell.significant_height = std::sqrt(std::pow(fit.real.wave_height, 2) - std::pow(height.mean, 2));
+          sea.motion.sea.systems.push_back(swell);
+        }
+        else
+        {
+          // Every wave system scaled alike: the heave's Hs is linear in the systems' heights, its
+          // peak period follows theirs.
+          for (sim::WaveSystem& system : sea.motion.sea.systems)
+          {
+            system.significant_height *= height_ratio;
+            system.peak_period *= period_ratio;
+          }
+        }
+        sea_fittable = true;
+      }
+      else
+        fit.findings.push_back(real_sea ? "the scenario has no sea to fit: give it one (motion type sea)"
+                                        : "the recording shows no sea in the 2-25 s band");
+    }
+  }
+  fit.differs = fit.differs || attitude_differs;
+  // What to try, the whole fit first: each is adopted only if it brings the withheld part closer.
+  if (attitude_differs && sea_fittable)
+  {
+    sim::Scenario both = sea;
+    both.motion.roll = attitude.motion.roll;
+    both.motion.pitch = attitude.motion.pitch;
+    both.motion.heading = attitude.motion.heading;
+    fit.candidates.push_back({ "tilt, heading and sea state", both });
+  }
+  if (attitude_differs)
+    fit.candidates.push_back({ "tilt and heading", attitude });
+  if (sea_fittable)
+    fit.candidates.push_back({ "sea state", sea });
+  return fit;
+}
+
+}  // namespace periodic_bias_compensation::gap

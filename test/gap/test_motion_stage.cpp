@@ -1,0 +1,78 @@
+// The diagnosis's motion stage: the sea state and the standing tilt of a recording against the
+// scenario's, fitted before any sensor effect.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+
+#include "periodic_bias_compensation/gap/gap.h"
+
+namespace gap = periodic_bias_compensation::gap;
+namespace sim = periodic_bias_compensation::sim;
+
+namespace
+{
+/// A moored ship in a long-crested JONSWAP sea whose heave is the wave elevation (response 1,
+/// no length filter), 10 Hz, 20 min, with a little sensor noise.
+sim::Scenario mooredSea(double significant_height, double peak_period)
+{
+  sim::Scenario s;
+  s.name = "moored_sea";
+  s.rate = 10.0;
+  s.duration = 1200.0;
+  s.motion.type = sim::MotionType::kSea;
+  s.motion.sea.response = { { 0.5, 0.5, 1.0, 0.8, 0.6, 0.1 } };
+  s.motion.sea.length = 0.0;
+  sim::WaveSystem waves;
+  waves.significant_height = significant_height;
+  waves.peak_period = peak_period;
+  s.motion.sea.systems = { waves };
+  sim::EffectSpec noise{ "white_noise", true, {} };
+  noise.params["accel_density"] = { 1e-3 };
+  noise.params["gyro_density"] = { 1e-4 };
+  s.effects = { noise };
+  return s;
+}
+}  // namespace
+
+TEST(GapMotion, SeaStateOfASimulatedSea)
+{
+  const gap::MotionSummary m = gap::summariseMotion(gap::simulateRecording(mooredSea(2.0, 9.0), 11));
+  EXPECT_NEAR(m.wave_height, 2.0, 0.2);
+  EXPECT_NEAR(m.peak_period, 9.0, 0.9);
+  EXPECT_NEAR(m.roll, 0.0, 0.01);
+  EXPECT_NEAR(m.pitch, 0.0, 0.01);
+}
+
+TEST(GapMotion, AnotherSeaAndATrimAreFittedBeforeSensorEffects)
+{
+  // The recording: a higher, longer sea and a 2 degree trim by the stern; the scenario: a small
+  // short sea on an even keel.
+  sim::Scenario recorded = mooredSea(2.0, 9.0);
+  recorded.motion.pitch = 0.035;
+  const gap::Report rep = gap::diagnose(gap::simulateRecording(recorded, 12), mooredSea(1.0, 6.0), gap::DiagnoseOptions());
+  const gap::MotionFit& m = rep.motion;
+  ASSERT_TRUE(m.differs) << gap::reportSummary(rep);
+  EXPECT_NEAR(m.real.wave_height, 2.0, 0.2);
+  EXPECT_NEAR(m.scenario.wave_height, 1.0, 0.1);
+  EXPECT_NEAR(m.real.pitch - m.scenario.pitch, 0.035, 0.005);
+  ASSERT_EQ(m.findings.size(), 2u) << gap::reportSummary(rep);
+  EXPECT_NE(m.findings[0].find("standing tilt"), std::string::npos) << m.findings[0];
+  EXPECT_NE(m.findings[1].find("sea state"), std::string::npos) << m.findings[1];
+  EXPECT_EQ(m.adopted, "tilt, heading and sea state") << gap::reportSummary(rep);
+  EXPECT_LT(m.gap_after, 0.5 * m.gap_before) << gap::reportSummary(rep);
+  EXPECT_NEAR(m.fitted.motion.sea.systems.at(0).significant_height, 2.0, 0.25);
+  EXPECT_NEAR(m.fitted.motion.sea.systems.at(0).peak_period, 9.0, 0.9);
+  // The trim is motion, not a sensor bias.
+  EXPECT_NE(rep.verdict_effect, "constant_bias") << gap::reportSummary(rep);
+  EXPECT_NE(gap::reportJson(rep).find("\"motion\": {\"differs\": true"), std::string::npos);
+}
+
+TEST(GapMotion, TheScenariosOwnMotionDoesNotDiffer)
+{
+  const sim::Scenario s = mooredSea(1.5, 8.0);
+  const gap::Report rep = gap::diagnose(gap::simulateRecording(s, 13), s, gap::DiagnoseOptions());
+  EXPECT_FALSE(rep.motion.differs) << gap::reportSummary(rep);
+  EXPECT_TRUE(rep.motion.adopted.empty());
+  EXPECT_EQ(rep.motion.gap_before, rep.motion.gap_after);
+}
