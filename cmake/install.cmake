@@ -4,7 +4,7 @@ install(TARGETS
     ${PROJECT_NAME}_core ${PROJECT_NAME}_sim ${PROJECT_NAME}_sim_ros ${PROJECT_NAME}_ros
     ${PROJECT_NAME}_nodelet ${PROJECT_NAME}_gap
     compensator_node compensate_bag simulate_imu simulator_node diagnose_gap validate_gap
-    evaluate_compensator
+    evaluate_compensator parameter_docs
   ARCHIVE DESTINATION ${CATKIN_PACKAGE_LIB_DESTINATION}
   LIBRARY DESTINATION ${CATKIN_PACKAGE_LIB_DESTINATION}
   RUNTIME DESTINATION ${CATKIN_PACKAGE_BIN_DESTINATION})

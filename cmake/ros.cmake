@@ -5,6 +5,7 @@ include_directories(include ${catkin_INCLUDE_DIRS})
 add_library(${PROJECT_NAME}_ros
   src/ros/conversions.cpp
   src/ros/parameters.cpp
+  src/ros/parameter_reference.cpp
   src/ros/raw_integrator.cpp
   src/ros/compensator_ros.cpp
   src/ros/bag_writer.cpp)
@@ -22,6 +23,11 @@ target_link_libraries(compensator_node ${PROJECT_NAME}_ros ${catkin_LIBRARIES})
 add_executable(compensate_bag src/tools/compensate_bag.cpp)
 # roslz4 and bz2: its pre-check decompresses chunks as rosbag will (not exported by rosbag_storage).
 target_link_libraries(compensate_bag ${PROJECT_NAME}_ros ${catkin_LIBRARIES} roslz4 bz2)
+
+# The parameter section of docs/ros_api.md and the declarations of cfg/Compensator.cfg, from
+# the parameter tables (`parameter_docs --update <repository>`; test_ros_conversions checks them).
+add_executable(parameter_docs src/tools/parameter_docs.cpp)
+target_link_libraries(parameter_docs ${PROJECT_NAME}_ros ${catkin_LIBRARIES})
 
 if(CATKIN_ENABLE_TESTING)
   find_package(rostest REQUIRED)
@@ -68,9 +74,11 @@ if(CATKIN_ENABLE_TESTING)
   target_link_libraries(test_reconfigure ${catkin_LIBRARIES})
   add_dependencies(test_reconfigure ${PROJECT_NAME}_generate_messages_cpp ${PROJECT_NAME}_gencfg)
 
-  # Conversions, parameter table and raw integration, no master.
+  # Conversions, parameter tables against config/compensator.yaml, cfg/Compensator.cfg and
+  # docs/ros_api.md, and raw integration, no master.
   catkin_add_gtest(test_ros_conversions test/ros/conversions_test.cpp)
   target_link_libraries(test_ros_conversions ${PROJECT_NAME}_ros ${catkin_LIBRARIES})
+  add_dependencies(test_ros_conversions ${PROJECT_NAME}_gencfg)
   target_compile_definitions(test_ros_conversions PRIVATE PBC_SOURCE_DIR="${CMAKE_CURRENT_SOURCE_DIR}")
 
   # compensate_bag end to end on the bench bag and its error paths (no master).
