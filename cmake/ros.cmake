@@ -1,16 +1,23 @@
 # ROS wrapper, nodelet, node, offline bag tools and rostests.
 include_directories(include ${catkin_INCLUDE_DIRS})
 
-# Wrapper library: message conversions, parameters, the CompensatorRos class, the bag writer.
+# Parameters: the wrapper's table, the readers (parameter server, YAML), the reconfigure message
+# glue and the text generated from the tables. Apart from the wrapper so that parameter_docs
+# builds without the code generated from cfg/Compensator.cfg, which it writes.
+add_library(${PROJECT_NAME}_parameters
+  src/ros/parameters.cpp
+  src/ros/parameter_reference.cpp)
+target_link_libraries(${PROJECT_NAME}_parameters ${PROJECT_NAME}_core ${catkin_LIBRARIES} yaml-cpp)
+
+# Wrapper library: message conversions, the CompensatorRos class, the bag writer.
 add_library(${PROJECT_NAME}_ros
   src/ros/conversions.cpp
-  src/ros/parameters.cpp
-  src/ros/parameter_reference.cpp
   src/ros/raw_integrator.cpp
   src/ros/compensator_ros.cpp
   src/ros/bag_writer.cpp)
 # roslz4 and bz2: BagWriter compresses chunks itself (not exported by rosbag_storage).
-target_link_libraries(${PROJECT_NAME}_ros ${PROJECT_NAME}_core ${catkin_LIBRARIES} yaml-cpp roslz4 bz2)
+target_link_libraries(${PROJECT_NAME}_ros ${PROJECT_NAME}_parameters ${PROJECT_NAME}_core ${catkin_LIBRARIES}
+  yaml-cpp roslz4 bz2)
 add_dependencies(${PROJECT_NAME}_ros ${PROJECT_NAME}_gencfg ${PROJECT_NAME}_generate_messages_cpp)
 
 add_library(${PROJECT_NAME}_nodelet src/ros/compensator_nodelet.cpp)
@@ -27,7 +34,7 @@ target_link_libraries(compensate_bag ${PROJECT_NAME}_ros ${catkin_LIBRARIES} ros
 # The parameter section of docs/ros_api.md and the declarations of cfg/Compensator.cfg, from
 # the parameter tables (`parameter_docs --update <repository>`; test_ros_conversions checks them).
 add_executable(parameter_docs src/tools/parameter_docs.cpp)
-target_link_libraries(parameter_docs ${PROJECT_NAME}_ros ${catkin_LIBRARIES})
+target_link_libraries(parameter_docs ${PROJECT_NAME}_parameters ${catkin_LIBRARIES})
 
 if(CATKIN_ENABLE_TESTING)
   find_package(rostest REQUIRED)

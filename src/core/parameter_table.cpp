@@ -206,7 +206,7 @@ using C = CompensatorConfig;
 Parameter<C> modeParameter()
 {
   ParameterInfo i = makeInfo("mode", Reconfigure::kRuntime, "", "compensation mode");
-  i.choices = { { toString(Mode::kDefault), "the project's estimator: harmonic tracking and comb drift removal" },
+  i.choices = { { toString(Mode::kDefault), "the estimator of this project: harmonic tracking and comb drift removal" },
                 { toString(Mode::kPaper), "Eq. 1-7 of Kim et al. 2005 as written" } };
   Parameter<C> p;
   static_cast<ParameterInfo&>(p) = i;
@@ -276,13 +276,13 @@ const ParameterTable<CompensatorConfig>& compensatorParameters()
     t.push_back(flagParameter("heave_filter", &C::heave_filter, run,
                      "wave motion from the whole wave band, not only the harmonic model (default mode)"));
     t.push_back(numberParameter("heave_corner_frequency", &C::heave_corner_frequency, run, closed(0.002, 0.05), "Hz",
-                       "corner of the broadband heave filter's drift removal",
+                       "corner of the drift removal of the broadband heave filter",
                        "the wave band must start well above it"));
     t.push_back(flagParameter("gyro_attitude", &C::gyro_attitude, run,
                      "samples without orientation: attitude integrated from the gyro, not one level frame (default "
                      "mode)"));
     t.push_back(numberParameter("tilt_time_constant", &C::tilt_time_constant, run, closed(2.0, 3600.0), "s",
-                       "time constant of the gyro attitude's pull towards the gravity direction",
+                       "time constant of the pull of the gyro attitude towards the gravity direction",
                        "shorter follows the wave accelerations"));
     t.push_back(flagParameter("estimate_gyro_bias", &C::estimate_gyro_bias, run,
                      "estimate the gyro bias on the level axes (gyro attitude)"));
@@ -293,7 +293,7 @@ const ParameterTable<CompensatorConfig>& compensatorParameters()
     t.push_back(numberParameter("max_rate_change", &C::max_rate_change, start, open(0.0, 1.0), "-",
                        "relative change of the sample rate that restarts the period search"));
     t.push_back(numberParameter("max_quaternion_norm_error", &C::max_quaternion_norm_error, start, open(0.0, 0.5), "-",
-                       "|1 - |q|| above this rejects a sample's orientation as non-unit"));
+                       "|1 - |q|| above this rejects the orientation of a sample as non-unit"));
     return t;
   }();
   return table;

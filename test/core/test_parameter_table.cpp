@@ -51,6 +51,11 @@ TEST(ParameterTable, KeysAreUniqueAndEveryEntryComplete)
     EXPECT_TRUE(keys.insert(p.key).second) << "key listed twice: " << p.key;
     EXPECT_FALSE(p.description.empty()) << p.key;
     EXPECT_EQ(p.description.find('\n'), std::string::npos) << p.key << ": the description is one line";
+    // dynamic_reconfigure refuses quotes in descriptions.
+    std::string text = p.description;
+    for (const pbc::ParameterChoice& choice : p.choices)
+      text += choice.description;
+    EXPECT_EQ(text.find_first_of("'\""), std::string::npos) << p.key << ": quotes in a description";
     EXPECT_EQ(pbc::typeOf(p.defaultValue()), p.type) << p.key;
     const bool number = p.type == ParameterType::kInt || p.type == ParameterType::kDouble;
     EXPECT_EQ(number, !p.unit.empty()) << p.key << ": numbers have a unit ('-' if none), flags and text none";
