@@ -10,18 +10,8 @@ namespace periodic_bias_compensation
 {
 std::string toString(ParameterType type)
 {
-  switch (type)
-  {
-    case ParameterType::kBool:
-      return "bool";
-    case ParameterType::kInt:
-      return "int";
-    case ParameterType::kDouble:
-      return "double";
-    case ParameterType::kString:
-      return "string";
-  }
-  return "unknown";
+  const char* const names[] = { "bool", "int", "double", "string" };
+  return names[static_cast<int>(type)];
 }
 
 ParameterType typeOf(const ParameterValue& value)
@@ -111,8 +101,7 @@ std::string describeAccepted(const ParameterInfo& info)
     case ParameterType::kInt:
     case ParameterType::kDouble:
       return toString(info.range);
-    case ParameterType::kString:
-    {
+    case ParameterType::kString: {
       std::string choices;
       for (const ParameterChoice& choice : info.choices)
         choices += (choices.empty() ? "" : ", ") + choice.value;
@@ -229,15 +218,14 @@ void addGains(ParameterTable<C>* table)
     {
       const GainTerm& term = kGainTerms[t];
       const bool alpha = t < 2;
-      ParameterInfo i = makeInfo(gainKey(term, axis), Reconfigure::kRuntime, "-",
-                             std::string(what[t]) + " " + term.name + ", level axis " + kAxisNames[axis] +
-                                 " (Eq. 6-7)",
-                             alpha ? rightOpen(0.0, 2.0) : closed(0.0, 12.0),
-                             alpha ? "the comb loop is unstable from 2 on" :
-                                     "larger values make the loop oscillate and diverge");
+      ParameterInfo i =
+          makeInfo(gainKey(term, axis), Reconfigure::kRuntime, "-",
+                   std::string(what[t]) + " " + term.name + ", level axis " + kAxisNames[axis] + " (Eq. 6-7)",
+                   alpha ? rightOpen(0.0, 2.0) : closed(0.0, 12.0),
+                   alpha ? "the comb loop is unstable from 2 on" : "larger values make the loop oscillate and diverge");
       const auto field = term.field;
       table->push_back(makeParameter<double, C>(
-          i, [axis, field](auto& config) -> auto& { return config.gains[axis].*field; }));
+          i, [ axis, field ](auto& config) -> auto& { return config.gains[axis].*field; }));
     }
 }
 }  // namespace
@@ -252,48 +240,51 @@ const ParameterTable<CompensatorConfig>& compensatorParameters()
     t.push_back(flagParameter("enable_periodic", &C::enable_periodic, run, "estimate and remove the periodic bias"));
     addGains(&t);
     t.push_back(numberParameter("calibration_duration", &C::calibration_duration, start, closed(0.0, 3600.0), "s",
-                       "length of the constant-bias window at the start and after ~calibrate"));
-    t.push_back(flagParameter("assume_static_calibration", &C::assume_static_calibration, start,
-                     "the sensor is at rest during the calibration window (paper Sec. 3.1); false: motion allowed"));
+                                "length of the constant-bias window at the start and after ~calibrate"));
+    t.push_back(
+        flagParameter("assume_static_calibration", &C::assume_static_calibration, start,
+                      "the sensor is at rest during the calibration window (paper Sec. 3.1); false: motion allowed"));
     t.push_back(numberParameter("fft_window", &C::fft_window, run, closed(2.0, 3600.0), "s",
-                       "length of the sliding FFT window of the period search"));
-    t.push_back(numberParameter("fft_hop", &C::fft_hop, run, closed(0.01, 3600.0), "s", "time between two FFT updates"));
+                                "length of the sliding FFT window of the period search"));
+    t.push_back(
+        numberParameter("fft_hop", &C::fft_hop, run, closed(0.01, 3600.0), "s", "time between two FFT updates"));
     // Below 1 mHz a period no longer fits three times in the longest window, and the period
     // tables (rate / min_frequency samples) would outgrow any memory.
     t.push_back(numberParameter("min_frequency", &C::min_frequency, run, atLeast(0.001), "Hz",
-                       "lowest dominant (wave encounter) frequency searched"));
+                                "lowest dominant (wave encounter) frequency searched"));
     t.push_back(numberParameter("max_frequency", &C::max_frequency, run, atLeast(0.001), "Hz",
-                       "highest dominant (wave encounter) frequency searched"));
+                                "highest dominant (wave encounter) frequency searched"));
     t.push_back(numberParameter("min_peak_ratio", &C::min_peak_ratio, run, atLeast(1.0), "-",
-                       "peak power / median power in the band needed to lock a period"));
+                                "peak power / median power in the band needed to lock a period"));
     t.push_back(numberParameter("harmonics", &C::harmonics, run, closed(1.0, kMaxHarmonics), "-",
-                       "harmonics of the dominant frequency tracked (default mode)"));
+                                "harmonics of the dominant frequency tracked (default mode)"));
     t.push_back(numberParameter("harmonic_memory", &C::harmonic_memory, run, atLeast(0.5), "s",
-                       "time constant of the harmonic estimator (default mode)"));
+                                "time constant of the harmonic estimator (default mode)"));
     t.push_back(numberParameter("drift_time_constant", &C::drift_time_constant, run, atLeast(0.5), "s",
-                       "time constant of the slow-motion drift removal (default mode)",
-                       "faster drift removal would follow the waves"));
+                                "time constant of the slow-motion drift removal (default mode)",
+                                "faster drift removal would follow the waves"));
     t.push_back(flagParameter("heave_filter", &C::heave_filter, run,
-                     "wave motion from the whole wave band, not only the harmonic model (default mode)"));
+                              "wave motion from the whole wave band, not only the harmonic model (default mode)"));
     t.push_back(numberParameter("heave_corner_frequency", &C::heave_corner_frequency, run, closed(0.002, 0.05), "Hz",
-                       "corner of the drift removal of the broadband heave filter",
-                       "the wave band must start well above it"));
-    t.push_back(flagParameter("gyro_attitude", &C::gyro_attitude, run,
-                     "samples without orientation: attitude integrated from the gyro, not one level frame (default "
-                     "mode)"));
+                                "corner of the drift removal of the broadband heave filter",
+                                "the wave band must start well above it"));
+    t.push_back(
+        flagParameter("gyro_attitude", &C::gyro_attitude, run,
+                      "samples without orientation: attitude integrated from the gyro, not one level frame (default "
+                      "mode)"));
     t.push_back(numberParameter("tilt_time_constant", &C::tilt_time_constant, run, closed(2.0, 3600.0), "s",
-                       "time constant of the pull of the gyro attitude towards the gravity direction",
-                       "shorter follows the wave accelerations"));
+                                "time constant of the pull of the gyro attitude towards the gravity direction",
+                                "shorter follows the wave accelerations"));
     t.push_back(flagParameter("estimate_gyro_bias", &C::estimate_gyro_bias, run,
-                     "estimate the gyro bias on the level axes (gyro attitude)"));
+                              "estimate the gyro bias on the level axes (gyro attitude)"));
     t.push_back(numberParameter("gravity", &C::gravity, start, open(9.0, 10.5), "m/s^2", "local gravity magnitude"));
     // 0 is a gap of more than kSlowStreamSteps sample periods (TimeBase).
     t.push_back(numberParameter("max_gap", &C::max_gap, run, atLeast(0.0), "s",
-                       "a gap between IMU stamps longer than this resets the integration"));
+                                "a gap between IMU stamps longer than this resets the integration"));
     t.push_back(numberParameter("max_rate_change", &C::max_rate_change, start, open(0.0, 1.0), "-",
-                       "relative change of the sample rate that restarts the period search"));
+                                "relative change of the sample rate that restarts the period search"));
     t.push_back(numberParameter("max_quaternion_norm_error", &C::max_quaternion_norm_error, start, open(0.0, 0.5), "-",
-                       "|1 - |q|| above this rejects the orientation of a sample as non-unit"));
+                                "|1 - |q|| above this rejects the orientation of a sample as non-unit"));
     return t;
   }();
   return table;

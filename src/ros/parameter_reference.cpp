@@ -42,15 +42,16 @@ std::string markdownRow(const ParameterInfo& info, const ParameterValue& default
   if (!info.range_reason.empty())
     description += " (range: " + info.range_reason + ")";
   return "| " + code("~" + info.key) + " | " + toString(info.type) + " | " + code(toString(default_value)) + " | " +
-         accepted(info) + " | " + cell(info.unit) + " | " +
-         (info.reconfigurable() ? "yes" : "") + " | " + cell(description) + " |\n";
+         accepted(info) + " | " + cell(info.unit) + " | " + (info.reconfigurable() ? "yes" : "") + " | " +
+         cell(description) + " |\n";
 }
 
 template <class Config>
 std::string markdownTable(const ParameterTable<Config>& table)
 {
-  std::string text = "| parameter | type | default | accepted | unit | run time | description |\n"
-                     "|---|---|---|---|---|---|---|\n";
+  std::string text =
+      "| parameter | type | default | accepted | unit | run time | description |\n"
+      "|---|---|---|---|---|---|---|\n";
   for (const Parameter<Config>& parameter : table)
     text += markdownRow(parameter, parameter.defaultValue());
   return text;
@@ -80,30 +81,15 @@ std::string python(const ParameterValue& value)
   return toString(value);
 }
 
-std::string generatorType(ParameterType type)
-{
-  switch (type)
-  {
-    case ParameterType::kBool:
-      return "bool_t";
-    case ParameterType::kInt:
-      return "int_t";
-    case ParameterType::kDouble:
-      return "double_t";
-    case ParameterType::kString:
-      return "str_t";
-  }
-  return "";
-}
-
 std::string declaration(const Parameter<CompensatorConfig>& parameter)
 {
   std::ostringstream line;
   const ParameterRange& range = parameter.range;
   const bool number = parameter.type == ParameterType::kInt || parameter.type == ParameterType::kDouble;
-  if (number && ((!range.min_inclusive && std::isfinite(range.min)) || (!range.max_inclusive && std::isfinite(range.max))))
+  if (number &&
+      ((!range.min_inclusive && std::isfinite(range.min)) || (!range.max_inclusive && std::isfinite(range.max))))
     line << "# accepted " << toString(range) << ": an open bound is given as the nearest double inside it\n";
-  line << "gen.add(" << python(parameter.key) << ", " << generatorType(parameter.type) << ", 0, "
+  line << "gen.add(" << python(parameter.key) << ", " << reconfigureType(parameter.type) << "_t" << ", 0, "
        << python(reconfigureDescription(parameter)) << ", " << python(parameter.defaultValue());
   // An infinite bound is dynamic_reconfigure's default (no bound): left out.
   if (number && std::isfinite(range.lowest()))
@@ -140,6 +126,12 @@ bool findSection(const std::string& text, const GeneratedSection& section, std::
   return true;
 }
 }  // namespace
+
+std::string reconfigureType(ParameterType type)
+{
+  const char* const names[] = { "bool", "int", "double", "str" };
+  return names[static_cast<int>(type)];
+}
 
 std::string reconfigureDescription(const ParameterInfo& info)
 {

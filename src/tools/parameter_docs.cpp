@@ -64,6 +64,7 @@ int main(int argc, char** argv)
   if (!repository.empty())
     return update(repository) ? 0 : 1;
   for (const pbc::GeneratedSection& section : pbc::generatedSections())
-    std::cout << section.begin_marker << "  (" << section.file << ")\n" << section.generate() << section.end_marker << "\n";
+    std::cout << section.begin_marker << "  (" << section.file << ")\n"
+              << section.generate() << section.end_marker << "\n";
   return 0;
 }

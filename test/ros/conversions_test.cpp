@@ -311,7 +311,6 @@ TEST(Parameters, ReconfigureDeclarationsAreTheTable)
 {
   const auto defaults = values(Tuning::__getDefault__()), minima = values(Tuning::__getMin__()),
              maxima = values(Tuning::__getMax__());
-  const char* const types[] = { "bool", "int", "double", "str" };
   std::size_t run_time = 0;
   for (const Parameter<CompensatorConfig>& p : compensatorParameters())
   {
@@ -340,7 +339,7 @@ TEST(Parameters, ReconfigureDeclarationsAreTheTable)
     for (const auto& description : Tuning::__getParamDescriptions__())
       if (description->name == p.key)
       {
-        EXPECT_EQ(description->type, types[static_cast<int>(p.type)]) << p.key << hint;
+        EXPECT_EQ(description->type, reconfigureType(p.type)) << p.key << hint;
         EXPECT_EQ(description->description, reconfigureDescription(p)) << p.key << hint;
       }
   }
@@ -404,9 +403,21 @@ TEST(Parameters, GeneratedTextIsCurrent)
     std::string generated;
     ASSERT_TRUE(extractSection(readFile(path), section, &generated))
         << path << " lacks the marker lines '" << section.begin_marker << "' / '" << section.end_marker << "'";
-    EXPECT_EQ(generated, section.generate())
-        << section.file << " is not what the parameter tables give; refresh it with\n  " << kRefreshCommand
-        << "\n(<repository>: " << PBC_SOURCE_DIR << ")";
+    const std::string expected = section.generate();
+    if (generated == expected)
+    {
+      continue;
+    }
+    std::istringstream have(generated), want(expected);
+    std::string have_line, want_line;
+    int line = 0;
+    while (std::getline(have, have_line) && std::getline(want, want_line) && have_line == want_line)
+    {
+      ++line;
+    }
+    ADD_FAILURE() << section.file << " is not what the parameter tables give (line " << line + 1
+                  << " of the generated part:\n  file:   " << have_line << "\n  tables: " << want_line
+                  << ")\nrefresh it with\n  " << kRefreshCommand << "\n(<repository>: " << PBC_SOURCE_DIR << ")";
   }
   // The section replacement leaves the rest of a file alone.
   const GeneratedSection& docs = generatedSections().front();

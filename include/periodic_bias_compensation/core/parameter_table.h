@@ -83,10 +83,10 @@ struct ParameterInfo
   std::string unit;         ///< SI unit; "-" for a ratio or count, empty for flags and text
   std::string description;  ///< one line
   Reconfigure reconfigure = Reconfigure::kStartup;
-  ParameterRange range;                 ///< numbers (kInt, kDouble)
-  std::vector<ParameterChoice> choices; ///< text: the accepted values (empty: any text)
-  bool non_empty = false;               ///< text: the empty string is refused
-  std::string range_reason;             ///< why the range is what it is (empty: evident)
+  ParameterRange range;                  ///< numbers (kInt, kDouble)
+  std::vector<ParameterChoice> choices;  ///< text: the accepted values (empty: any text)
+  bool non_empty = false;                ///< text: the empty string is refused
+  std::string range_reason;              ///< why the range is what it is (empty: evident)
 
   bool reconfigurable() const { return reconfigure == Reconfigure::kRuntime; }
 };
@@ -132,7 +132,10 @@ Parameter<Config> makeParameter(ParameterInfo info, Access access)
 template <class Config, class T>
 auto member(T Config::*field)
 {
-  return [field](auto& config) -> auto& { return config.*field; };
+  return [field](auto& config) -> auto&
+  {
+    return config.*field;
+  };
 }
 
 /// The fields every parameter has.

@@ -14,10 +14,10 @@ namespace periodic_bias_compensation
 /// A part of a checked-in file generated from the tables, between two marker lines.
 struct GeneratedSection
 {
-  std::string file;          ///< path relative to the repository root
-  std::string begin_marker;  ///< whole line before the generated text
-  std::string end_marker;    ///< whole line after it
-  std::string (*generate)(); ///< the text between the markers
+  std::string file;           ///< path relative to the repository root
+  std::string begin_marker;   ///< whole line before the generated text
+  std::string end_marker;     ///< whole line after it
+  std::string (*generate)();  ///< the text between the markers
 };
 /// docs/ros_api.md (parameter tables) and cfg/Compensator.cfg (gen.add declarations).
 const std::vector<GeneratedSection>& generatedSections();
@@ -27,6 +27,8 @@ const std::vector<GeneratedSection>& generatedSections();
 std::string parameterReference();
 /// The gen.add(...) lines of cfg/Compensator.cfg for the run-time parameters.
 std::string reconfigureDeclarations();
+/// dynamic_reconfigure's name of a type: "bool", "int", "double", "str".
+std::string reconfigureType(ParameterType type);
 /// The description dynamic_reconfigure shows: the table's, with the unit in brackets.
 std::string reconfigureDescription(const ParameterInfo& info);
 
