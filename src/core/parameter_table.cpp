@@ -225,7 +225,7 @@ void addGains(ParameterTable<C>* table)
                    alpha ? "the comb loop is unstable from 2 on" : "larger values make the loop oscillate and diverge");
       const auto field = term.field;
       table->push_back(makeParameter<double, C>(
-          i, [ axis, field ](auto& config) -> auto& { return config.gains[axis].*field; }));
+          i, [axis, field](auto& config) -> auto& { return config.gains[axis].*field; }));
     }
 }
 }  // namespace

@@ -132,10 +132,7 @@ Parameter<Config> makeParameter(ParameterInfo info, Access access)
 template <class Config, class T>
 auto member(T Config::*field)
 {
-  return [field](auto& config) -> auto&
-  {
-    return config.*field;
-  };
+  return [field](auto& config) -> auto& { return config.*field; };
 }
 
 /// The fields every parameter has.
