@@ -1,6 +1,7 @@
 # Estimation core: no ROS include, its own library, tested without a master.
 add_library(${PROJECT_NAME}_core
   src/core/compensator.cpp
+  src/core/parameter_table.cpp
   src/core/frequency_tracker.cpp
   src/core/calibration_file.cpp
   src/core/gain_tuning.cpp
@@ -21,6 +22,7 @@ if(CATKIN_ENABLE_TESTING)
     test/core/main.cpp
     test/core/test_frequency_tracker.cpp
     test/core/test_compensator.cpp
+    test/core/test_parameter_table.cpp
     test/core/test_bad_input.cpp
     test/core/test_gain_tuning.cpp
     test/core/test_gyro_attitude.cpp

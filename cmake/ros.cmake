@@ -1,11 +1,18 @@
 # ROS wrapper, nodelet, node, offline bag tools and rostests.
 include_directories(include ${catkin_INCLUDE_DIRS})
 
-# Wrapper library: message conversions, parameters, the IMU mounting, the CompensatorRos class,
-# the bag writer and the bag check of the offline tools.
+# Parameters: the wrapper's table, the readers (parameter server, YAML), the reconfigure message
+# glue and the text generated from the tables. Apart from the wrapper so that parameter_docs
+# builds without the code generated from cfg/Compensator.cfg, which it writes.
+add_library(${PROJECT_NAME}_parameters
+  src/ros/parameters.cpp
+  src/ros/parameter_reference.cpp)
+target_link_libraries(${PROJECT_NAME}_parameters ${PROJECT_NAME}_core ${catkin_LIBRARIES} yaml-cpp)
+
+# Wrapper library: message conversions, the IMU mounting, the CompensatorRos class, the bag writer
+# and the bag check of the offline tools.
 add_library(${PROJECT_NAME}_ros
   src/ros/conversions.cpp
-  src/ros/parameters.cpp
   src/ros/raw_integrator.cpp
   src/ros/mounting.cpp
   src/ros/bag_check.cpp
@@ -13,7 +20,8 @@ add_library(${PROJECT_NAME}_ros
   src/ros/bag_writer.cpp)
 # roslz4 and bz2: BagWriter compresses chunks itself, the bag check decompresses them as rosbag
 # will (not exported by rosbag_storage).
-target_link_libraries(${PROJECT_NAME}_ros ${PROJECT_NAME}_core ${catkin_LIBRARIES} yaml-cpp roslz4 bz2)
+target_link_libraries(${PROJECT_NAME}_ros ${PROJECT_NAME}_parameters ${PROJECT_NAME}_core ${catkin_LIBRARIES}
+  yaml-cpp roslz4 bz2)
 add_dependencies(${PROJECT_NAME}_ros ${PROJECT_NAME}_gencfg ${PROJECT_NAME}_generate_messages_cpp)
 
 add_library(${PROJECT_NAME}_nodelet src/ros/compensator_nodelet.cpp)
@@ -25,6 +33,11 @@ target_link_libraries(compensator_node ${PROJECT_NAME}_ros ${catkin_LIBRARIES})
 # Offline: the same core and conversions over a bag, no master.
 add_executable(compensate_bag src/tools/compensate_bag.cpp)
 target_link_libraries(compensate_bag ${PROJECT_NAME}_ros ${PROJECT_NAME}_tools ${catkin_LIBRARIES})
+
+# The parameter section of docs/ros_api.md and the declarations of cfg/Compensator.cfg, from
+# the parameter tables (`parameter_docs --update <repository>`; test_ros_conversions checks them).
+add_executable(parameter_docs src/tools/parameter_docs.cpp)
+target_link_libraries(parameter_docs ${PROJECT_NAME}_parameters ${catkin_LIBRARIES})
 
 if(CATKIN_ENABLE_TESTING)
   find_package(rostest REQUIRED)
@@ -71,9 +84,11 @@ if(CATKIN_ENABLE_TESTING)
   target_link_libraries(test_reconfigure ${catkin_LIBRARIES})
   add_dependencies(test_reconfigure ${PROJECT_NAME}_generate_messages_cpp ${PROJECT_NAME}_gencfg)
 
-  # Conversions, parameter table and raw integration, no master.
+  # Conversions, parameter tables against config/compensator.yaml, cfg/Compensator.cfg and
+  # docs/ros_api.md, and raw integration, no master.
   catkin_add_gtest(test_ros_conversions test/ros/conversions_test.cpp)
   target_link_libraries(test_ros_conversions ${PROJECT_NAME}_ros ${catkin_LIBRARIES})
+  add_dependencies(test_ros_conversions ${PROJECT_NAME}_gencfg)
   target_compile_definitions(test_ros_conversions PRIVATE PBC_SOURCE_DIR="${CMAKE_CURRENT_SOURCE_DIR}")
 
   # compensate_bag end to end on the bench bag, the batch runs of docs/batch.md, and its error

@@ -3,11 +3,11 @@
 #include "periodic_bias_compensation/core/harmonic_model.h"
 #include "periodic_bias_compensation/core/leveller.h"
 #include "periodic_bias_compensation/core/paper_loop.h"
+#include "periodic_bias_compensation/core/parameter_table.h"
 
 #include <algorithm>
 #include <cmath>
 #include <deque>
-#include <sstream>
 #include <stdexcept>
 #include <vector>
 
@@ -130,54 +130,15 @@ std::string toString(LevelSource source)
   return "unknown";
 }
 
-bool CompensatorConfig::validate(std::string* why) const
+bool CompensatorConfig::validate(std::string* why, const std::vector<std::string>& changed) const
 {
-  std::ostringstream error;
-  auto check = [&error](bool ok, const std::string& key, const std::string& rule, double value) {
-    if (!ok && error.tellp() == 0)
-      error << key << " = " << value << " is out of range: " << rule;
-  };
-  const char* axis_names[3] = { "x", "y", "z" };
-  for (int i = 0; i < 3; ++i)
-  {
-    const AxisGains& g = gains[i];
-    const std::string axis = axis_names[i];
-    // Comb loop d(t+1) = beta * midrange + alpha * (drift over one period): the velocity/position
-    // error over one period is multiplied by (1 - alpha) each period, so 0 <= alpha < 2 keeps it
-    // stable; the mid-range term adds damping that destabilises the loop above beta = 12
-    // (measured, test_compensator: PaperGainLimits).
-    for (const auto& [name, alpha] : { std::pair{ "alpha_v_", g.alpha_v }, std::pair{ "alpha_p_", g.alpha_p } })
-      check(std::isfinite(alpha) && alpha >= 0.0 && alpha < 2.0, name + axis,
-            "0 <= alpha < 2 (the comb loop is unstable from 2 on)", alpha);
-    for (const auto& [name, beta] : { std::pair{ "beta_v_", g.beta_v }, std::pair{ "beta_p_", g.beta_p } })
-      check(std::isfinite(beta) && beta >= 0.0 && beta <= 12.0, name + axis,
-            "0 <= beta <= 12 (larger values make the loop oscillate and diverge)", beta);
-  }
-  check(calibration_duration >= 0.0 && calibration_duration <= 3600.0, "calibration_duration",
-        "0 <= s <= 3600", calibration_duration);
-  check(fft_window >= 2.0 && fft_window <= 3600.0, "fft_window", "2 <= s <= 3600", fft_window);
-  check(fft_hop > 0.0 && fft_hop <= fft_window, "fft_hop", "0 < s <= fft_window", fft_hop);
-  check(min_frequency > 0.0, "min_frequency", "> 0 Hz", min_frequency);
-  check(max_frequency > min_frequency, "max_frequency", "> min_frequency", max_frequency);
-  check(min_peak_ratio >= 1.0, "min_peak_ratio", ">= 1", min_peak_ratio);
-  check(harmonics >= 1 && harmonics <= kMaxHarmonics, "harmonics", "1 .. 4", harmonics);
-  check(harmonic_memory >= 0.5, "harmonic_memory", ">= 0.5 s", harmonic_memory);
-  check(heave_corner_frequency >= 0.002 && heave_corner_frequency <= 0.05, "heave_corner_frequency",
-        "0.002 <= Hz <= 0.05 (the wave band must start well above it)", heave_corner_frequency);
-  check(drift_time_constant >= 0.5, "drift_time_constant",
-        ">= 0.5 s (faster drift removal would follow the waves)", drift_time_constant);
-  check(tilt_time_constant >= 2.0 && tilt_time_constant <= 3600.0, "tilt_time_constant",
-        "2 <= s <= 3600 (shorter follows the wave accelerations)", tilt_time_constant);
-  check(gravity > 9.0 && gravity < 10.5, "gravity", "9.0 < g < 10.5 m/s^2", gravity);
-  check(max_gap > 0.0, "max_gap", "> 0 s", max_gap);
-  check(max_rate_change > 0.0 && max_rate_change < 1.0, "max_rate_change", "0 < r < 1", max_rate_change);
-  check(max_quaternion_norm_error > 0.0 && max_quaternion_norm_error < 0.5, "max_quaternion_norm_error",
-        "0 < e < 0.5", max_quaternion_norm_error);
-  if (error.tellp() == 0)
-    return true;
-  if (why)
-    *why = error.str();
-  return false;
+  const ParameterTable<CompensatorConfig>& table = compensatorParameters();
+  if (!checkRanges(table, *this, why))
+    return false;
+  for (const ParameterOrder& rule : compensatorOrderRules())
+    if (!checkOrder(table, rule, *this, changed, why))
+      return false;
+  return true;
 }
 
 /// Estimator of one level axis.
@@ -227,7 +188,7 @@ public:
 
   bool setConfig(const CompensatorConfig& config, std::string* why)
   {
-    if (!config.validate(why))
+    if (!config.validate(why, keys(changes(compensatorParameters(), config_, config))))
       return false;
     const bool restart_search = config.mode != config_.mode || config.fft_window != config_.fft_window ||
                                 config.min_frequency != config_.min_frequency ||

@@ -1,4 +1,5 @@
 #include "periodic_bias_compensation/core/gain_tuning.h"
+#include "periodic_bias_compensation/core/parameter_table.h"
 
 #include <cmath>
 #include <limits>
@@ -97,11 +98,9 @@ std::string gainsToYaml(const std::array<AxisGains, 3>& gains, const std::string
   std::ostringstream out;
   out.precision(6);
   out << "# " << comment << "\n";
-  const char* axes = "xyz";
-  for (int i = 0; i < 3; ++i)
-    out << "alpha_v_" << axes[i] << ": " << gains[i].alpha_v << "\nalpha_p_" << axes[i] << ": " << gains[i].alpha_p
-        << "\nbeta_v_" << axes[i] << ": " << gains[i].beta_v << "\nbeta_p_" << axes[i] << ": " << gains[i].beta_p
-        << "\n";
+  for (int axis = 0; axis < 3; ++axis)
+    for (const GainTerm& term : kGainTerms)
+      out << gainKey(term, axis) << ": " << gains[axis].*term.field << "\n";
   return out.str();
 }
 }  // namespace periodic_bias_compensation

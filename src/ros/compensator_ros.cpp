@@ -21,72 +21,6 @@ namespace
 constexpr double kWarnPeriod = 5.0;  ///< throttle of hot-path warnings [s]
 /// Input arriving with nothing published for this long is an ERROR in diagnostics [s].
 constexpr double kNoOutputTime = 1.0;
-const char* const kAxisNames[3] = { "x", "y", "z" };
-
-/// Copies the run-time tunable fields of a reconfigure request into a core config.
-/// False with a message for an unknown mode name.
-bool applyTuning(const TuningConfig& tuning, CompensatorConfig* config, std::string* why)
-{
-  if (!modeFromString(tuning.mode, &config->mode))
-  {
-    *why = "unknown mode '" + tuning.mode + "'";
-    return false;
-  }
-  config->enable_constant = tuning.enable_constant;
-  config->enable_periodic = tuning.enable_periodic;
-  config->gains[0] = { tuning.alpha_v_x, tuning.alpha_p_x, tuning.beta_v_x, tuning.beta_p_x };
-  config->gains[1] = { tuning.alpha_v_y, tuning.alpha_p_y, tuning.beta_v_y, tuning.beta_p_y };
-  config->gains[2] = { tuning.alpha_v_z, tuning.alpha_p_z, tuning.beta_v_z, tuning.beta_p_z };
-  config->fft_window = tuning.fft_window;
-  config->fft_hop = tuning.fft_hop;
-  config->min_frequency = tuning.min_frequency;
-  config->max_frequency = tuning.max_frequency;
-  config->min_peak_ratio = tuning.min_peak_ratio;
-  config->harmonics = tuning.harmonics;
-  config->harmonic_memory = tuning.harmonic_memory;
-  config->drift_time_constant = tuning.drift_time_constant;
-  config->heave_filter = tuning.heave_filter;
-  config->heave_corner_frequency = tuning.heave_corner_frequency;
-  config->gyro_attitude = tuning.gyro_attitude;
-  config->tilt_time_constant = tuning.tilt_time_constant;
-  config->estimate_gyro_bias = tuning.estimate_gyro_bias;
-  config->max_gap = tuning.max_gap;
-  return true;
-}
-
-/// The inverse of applyTuning: what the reconfigure server should show for a core config.
-void toTuning(const CompensatorConfig& config, TuningConfig* tuning)
-{
-  tuning->mode = toString(config.mode);
-  tuning->enable_constant = config.enable_constant;
-  tuning->enable_periodic = config.enable_periodic;
-  tuning->alpha_v_x = config.gains[0].alpha_v;
-  tuning->alpha_p_x = config.gains[0].alpha_p;
-  tuning->beta_v_x = config.gains[0].beta_v;
-  tuning->beta_p_x = config.gains[0].beta_p;
-  tuning->alpha_v_y = config.gains[1].alpha_v;
-  tuning->alpha_p_y = config.gains[1].alpha_p;
-  tuning->beta_v_y = config.gains[1].beta_v;
-  tuning->beta_p_y = config.gains[1].beta_p;
-  tuning->alpha_v_z = config.gains[2].alpha_v;
-  tuning->alpha_p_z = config.gains[2].alpha_p;
-  tuning->beta_v_z = config.gains[2].beta_v;
-  tuning->beta_p_z = config.gains[2].beta_p;
-  tuning->fft_window = config.fft_window;
-  tuning->fft_hop = config.fft_hop;
-  tuning->min_frequency = config.min_frequency;
-  tuning->max_frequency = config.max_frequency;
-  tuning->min_peak_ratio = config.min_peak_ratio;
-  tuning->harmonics = config.harmonics;
-  tuning->harmonic_memory = config.harmonic_memory;
-  tuning->drift_time_constant = config.drift_time_constant;
-  tuning->heave_filter = config.heave_filter;
-  tuning->heave_corner_frequency = config.heave_corner_frequency;
-  tuning->gyro_attitude = config.gyro_attitude;
-  tuning->tilt_time_constant = config.tilt_time_constant;
-  tuning->estimate_gyro_bias = config.estimate_gyro_bias;
-  tuning->max_gap = config.max_gap;
-}
 
 bool fileExists(const std::string& path)
 {
@@ -419,24 +353,45 @@ void CompensatorRos::reconfigure(TuningConfig& config, uint32_t /*level*/)
     // The server's first call carries what it read from the parameter server; the start-up
     // parameters, already validated, win and are shown to clients.
     first_reconfigure_ = false;
-    toTuning(compensator_->config(), &config);
+    showRunningConfig(&config);
     return;
   }
-  CompensatorConfig next = compensator_->config();
+  const CompensatorConfig before = compensator_->config();
+  CompensatorConfig next = before;
+  dynamic_reconfigure::Config request;
+  config.__toMessage__(request);
   std::string why;
-  if (!applyTuning(config, &next, &why) || !compensator_->setConfig(next, &why))
+  const bool applied = applyTuning(request, &next, &why) && compensator_->setConfig(next, &why);
+  const std::vector<ParameterChange> changed = changes(compensatorParameters(), before, next);
+  if (!applied)
   {
-    ROS_ERROR("reconfigure refused, keeping the previous parameters: %s", why.c_str());
+    std::string names;
+    for (const ParameterChange& change : changed)
+    {
+      names += (names.empty() ? " of " : ", ") + change.info->key;
+    }
+    ROS_WARN("reconfigure%s refused, keeping the previous parameters: %s", names.c_str(), why.c_str());
     ++counters_.refused_reconfigures;
     last_refusal_ = why;
     // The server stores and returns the config it handed us: writing the running values back
     // makes the client see the refusal (the same effect as updateConfig, without re-entering).
-    toTuning(compensator_->config(), &config);
+    showRunningConfig(&config);
     return;
   }
+  for (const ParameterChange& change : changed)
+  {
+    ROS_INFO("reconfigure: %s %s -> %s", change.info->key.c_str(), toString(change.before).c_str(),
+             toString(change.after).c_str());
+  }
   params_.core = compensator_->config();
-  ROS_INFO("reconfigured: mode %s, constant %s, periodic %s", toString(params_.core.mode).c_str(),
-           params_.core.enable_constant ? "on" : "off", params_.core.enable_periodic ? "on" : "off");
+}
+
+void CompensatorRos::showRunningConfig(TuningConfig* config) const
+{
+  dynamic_reconfigure::Config message;
+  config->__toMessage__(message);
+  toTuning(compensator_->config(), &message);
+  config->__fromMessage__(message);
 }
 
 bool CompensatorRos::calibrate(std_srvs::Trigger::Request& /*req*/, std_srvs::Trigger::Response& res)

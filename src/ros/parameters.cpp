@@ -2,152 +2,151 @@
 
 #include <algorithm>
 #include <cmath>
-#include <functional>
 #include <stdexcept>
 
 namespace periodic_bias_compensation
 {
 namespace
 {
-using Reader = std::function<bool(const ParameterSource&, const std::string&, Parameters*, std::string*)>;
-
-struct Key
+std::string typeError(const std::string& key, const std::string& expected)
 {
-  std::string name;
-  Reader read;
-};
-
-template <class T, class Getter>
-Reader field(Getter getter)
-{
-  return [getter](const ParameterSource& source, const std::string& key, Parameters* p, std::string* why) {
-    T* target = getter(p);
-    if constexpr (std::is_same_v<T, bool>)
-    {
-      return source.getBool(key, target, why);
-    }
-    else if constexpr (std::is_same_v<T, int>)
-    {
-      return source.getInt(key, target, why);
-    }
-    else if constexpr (std::is_same_v<T, double>)
-    {
-      return source.getDouble(key, target, why);
-    }
-    else
-    {
-      return source.getString(key, target, why);
-    }
-  };
+  return "parameter '" + key + "': expected " + expected;
 }
 
-const std::vector<Key>& keyTable()
+/// Reads a present key as a value of `type`.
+bool readValue(const ParameterSource& source, const std::string& key, ParameterType type, ParameterValue* value,
+               std::string* why)
 {
-  static const std::vector<Key> table = [] {
-    std::vector<Key> t;
-    t.push_back({ "mode", [](const ParameterSource& s, const std::string& key, Parameters* p, std::string* why) {
-                   std::string name;
-                   if (!s.getString(key, &name, why))
-                   {
-                     return false;
-                   }
-                   if (!modeFromString(name, &p->core.mode))
-                   {
-                     *why = "parameter 'mode': unknown mode '" + name + "' (expected 'paper' or 'default')";
-                     return false;
-                   }
-                   return true;
-                 } });
-    const char* axes[3] = { "x", "y", "z" };
-    for (int i = 0; i < 3; ++i)
+  switch (type)
+  {
+    case ParameterType::kBool:
+      return source.getBool(key, &value->emplace<bool>(), why);
+    case ParameterType::kInt:
+      return source.getInt(key, &value->emplace<int>(), why);
+    case ParameterType::kDouble:
+      return source.getDouble(key, &value->emplace<double>(), why);
+    case ParameterType::kString:
+      return source.getString(key, &value->emplace<std::string>(), why);
+  }
+  return false;
+}
+
+/// Reads `key` into *config when it is one of `table`'s keys; *found tells whether it is.
+template <class Config>
+bool readKey(const ParameterSource& source, const std::string& key, const ParameterTable<Config>& table,
+             Config* config, bool* found, std::string* why)
+{
+  const Parameter<Config>* parameter = findParameter(table, key);
+  *found = parameter != nullptr;
+  if (parameter == nullptr)
+    return true;
+  ParameterValue value;
+  std::string message;
+  if (!readValue(source, key, parameter->type, &value, why))
+    return false;
+  if (!assign(*parameter, value, config, &message))
+  {
+    *why = "parameter '" + key + "': " + message;
+    return false;
+  }
+  return true;
+}
+
+ParameterValue valueOf(const dynamic_reconfigure::BoolParameter& entry)
+{
+  return entry.value != 0;
+}
+ParameterValue valueOf(const dynamic_reconfigure::IntParameter& entry)
+{
+  return static_cast<int>(entry.value);
+}
+ParameterValue valueOf(const dynamic_reconfigure::DoubleParameter& entry)
+{
+  return static_cast<double>(entry.value);
+}
+ParameterValue valueOf(const dynamic_reconfigure::StrParameter& entry)
+{
+  return entry.value;
+}
+
+template <class Entry>
+bool applyEntries(const std::vector<Entry>& entries, CompensatorConfig* config, std::string* why)
+{
+  for (const Entry& entry : entries)
+  {
+    const Parameter<CompensatorConfig>* parameter = findParameter(compensatorParameters(), entry.name);
+    if (parameter == nullptr || !parameter->reconfigurable())
     {
-      const std::string a = axes[i];
-      t.push_back({ "alpha_v_" + a, field<double>([i](Parameters* p) { return &p->core.gains[i].alpha_v; }) });
-      t.push_back({ "alpha_p_" + a, field<double>([i](Parameters* p) { return &p->core.gains[i].alpha_p; }) });
-      t.push_back({ "beta_v_" + a, field<double>([i](Parameters* p) { return &p->core.gains[i].beta_v; }) });
-      t.push_back({ "beta_p_" + a, field<double>([i](Parameters* p) { return &p->core.gains[i].beta_p; }) });
+      *why = "'" + entry.name + "' is not a run-time parameter of the compensator";
+      return false;
     }
-    t.push_back({ "enable_constant", field<bool>([](Parameters* p) { return &p->core.enable_constant; }) });
-    t.push_back({ "enable_periodic", field<bool>([](Parameters* p) { return &p->core.enable_periodic; }) });
-    t.push_back({ "calibration_duration", field<double>([](Parameters* p) { return &p->core.calibration_duration; }) });
-    t.push_back({ "assume_static_calibration",
-                  field<bool>([](Parameters* p) { return &p->core.assume_static_calibration; }) });
-    t.push_back({ "fft_window", field<double>([](Parameters* p) { return &p->core.fft_window; }) });
-    t.push_back({ "fft_hop", field<double>([](Parameters* p) { return &p->core.fft_hop; }) });
-    t.push_back({ "min_frequency", field<double>([](Parameters* p) { return &p->core.min_frequency; }) });
-    t.push_back({ "max_frequency", field<double>([](Parameters* p) { return &p->core.max_frequency; }) });
-    t.push_back({ "min_peak_ratio", field<double>([](Parameters* p) { return &p->core.min_peak_ratio; }) });
-    t.push_back({ "harmonics", field<int>([](Parameters* p) { return &p->core.harmonics; }) });
-    t.push_back({ "harmonic_memory", field<double>([](Parameters* p) { return &p->core.harmonic_memory; }) });
-    t.push_back({ "drift_time_constant", field<double>([](Parameters* p) { return &p->core.drift_time_constant; }) });
-    t.push_back({ "heave_filter", field<bool>([](Parameters* p) { return &p->core.heave_filter; }) });
-    t.push_back({ "heave_corner_frequency",
-                  field<double>([](Parameters* p) { return &p->core.heave_corner_frequency; }) });
-    t.push_back({ "gyro_attitude", field<bool>([](Parameters* p) { return &p->core.gyro_attitude; }) });
-    t.push_back({ "tilt_time_constant", field<double>([](Parameters* p) { return &p->core.tilt_time_constant; }) });
-    t.push_back({ "estimate_gyro_bias", field<bool>([](Parameters* p) { return &p->core.estimate_gyro_bias; }) });
-    t.push_back({ "gravity", field<double>([](Parameters* p) { return &p->core.gravity; }) });
-    t.push_back({ "max_gap", field<double>([](Parameters* p) { return &p->core.max_gap; }) });
-    t.push_back({ "max_rate_change", field<double>([](Parameters* p) { return &p->core.max_rate_change; }) });
-    t.push_back({ "max_quaternion_norm_error",
-                  field<double>([](Parameters* p) { return &p->core.max_quaternion_norm_error; }) });
-    t.push_back({ "odom_frame", field<std::string>([](Parameters* p) { return &p->ros.odom_frame; }) });
-    t.push_back({ "base_frame", field<std::string>([](Parameters* p) { return &p->ros.base_frame; }) });
-    t.push_back({ "imu_frame", field<std::string>([](Parameters* p) { return &p->ros.imu_frame; }) });
-    t.push_back({ "publish_tf", field<bool>([](Parameters* p) { return &p->ros.publish_tf; }) });
-    t.push_back({ "path_max_length", field<int>([](Parameters* p) { return &p->ros.path_max_length; }) });
-    t.push_back({ "path_rate", field<double>([](Parameters* p) { return &p->ros.path_rate; }) });
-    t.push_back({ "mount_timeout", field<double>([](Parameters* p) { return &p->ros.mount_timeout; }) });
-    t.push_back({ "identity_mounting", field<bool>([](Parameters* p) { return &p->ros.identity_mounting; }) });
-    t.push_back({ "calibration_file", field<std::string>([](Parameters* p) { return &p->ros.calibration_file; }) });
-    t.push_back({ "diagnostic_period", field<double>([](Parameters* p) { return &p->ros.diagnostic_period; }) });
+    if (!assign(*parameter, valueOf(entry), config, why))
+      return false;
+  }
+  return true;
+}
+
+/// Sets the entry `name` of *entries to `value`, appending it when there is none.
+template <class Entry, class T>
+void put(std::vector<Entry>* entries, const std::string& name, const T& value)
+{
+  for (Entry& entry : *entries)
+    if (entry.name == name)
+    {
+      entry.value = value;
+      return;
+    }
+  Entry entry;
+  entry.name = name;
+  entry.value = value;
+  entries->push_back(entry);
+}
+}  // namespace
+
+const ParameterTable<RosOptions>& rosOptionParameters()
+{
+  static const ParameterTable<RosOptions> table = [] {
+    using R = RosOptions;
+    const Reconfigure start = Reconfigure::kStartup;
+    ParameterTable<R> t;
+    t.push_back(textParameter("calibration_file", &R::calibration_file, start,
+                              "constant-bias YAML (constant_bias: [bx, by, bz], m/s^2, level frame): loaded at "
+                              "start when it exists, written by ~save_calibration; empty: none",
+                              false));
+    t.push_back(textParameter("odom_frame", &R::odom_frame, start,
+                              "header.frame_id of odometry/*, bias_state and path/* (the level ENU frame)", true));
+    t.push_back(textParameter("base_frame", &R::base_frame, start,
+                              "child_frame_id of the odometry; the IMU mounting is looked up as imu frame -> "
+                              "base_frame",
+                              true));
+    t.push_back(textParameter("imu_frame", &R::imu_frame, start,
+                              "required frame_id of imu/data; empty: that of the first message used", false));
+    t.push_back(numberParameter("mount_timeout", &R::mount_timeout, start, atLeast(0.0), "s",
+                                "message time to wait for the imu -> base transform before taking the identity"));
+    t.push_back(flagParameter("identity_mounting", &R::identity_mounting, start,
+                              "the IMU is mounted aligned with base_frame: no transform looked up"));
+    t.push_back(flagParameter("publish_tf", &R::publish_tf, start,
+                              "broadcast the TF odom_frame -> base_frame from odometry/filtered"));
+    t.push_back(numberParameter("path_max_length", &R::path_max_length, start, atLeast(1.0), "-",
+                                "poses kept in path/filtered and path/raw"));
+    t.push_back(numberParameter("path_rate", &R::path_rate, start, above(0.0), "Hz",
+                                "rate of the poses added to path/filtered and path/raw, and of their publication"));
+    t.push_back(numberParameter("diagnostic_period", &R::diagnostic_period, start, above(0.0), "s",
+                                "period of the /diagnostics status"));
     return t;
   }();
   return table;
 }
 
-std::string typeError(const std::string& key, const std::string& expected)
-{
-  return "parameter '" + key + "': expected " + expected;
-}
-}  // namespace
-
 bool RosOptions::validate(std::string* why) const
 {
-  auto fail = [why](const std::string& message) {
-    if (why != nullptr)
-    {
-      *why = message;
-    }
+  if (!checkRanges(rosOptionParameters(), *this, why))
     return false;
-  };
-  if (odom_frame.empty())
-  {
-    return fail("parameter 'odom_frame': must not be empty");
-  }
-  if (base_frame.empty())
-  {
-    return fail("parameter 'base_frame': must not be empty");
-  }
   if (odom_frame == base_frame)
   {
-    return fail("parameters 'odom_frame' and 'base_frame' must differ (both '" + odom_frame + "')");
-  }
-  if (path_max_length < 1)
-  {
-    return fail("parameter 'path_max_length': must be >= 1, got " + std::to_string(path_max_length));
-  }
-  if (!(path_rate > 0.0 && std::isfinite(path_rate)))
-  {
-    return fail("parameter 'path_rate': must be > 0 Hz");
-  }
-  if (!(mount_timeout >= 0.0 && std::isfinite(mount_timeout)))
-  {
-    return fail("parameter 'mount_timeout': must be >= 0 s");
-  }
-  if (!(diagnostic_period > 0.0 && std::isfinite(diagnostic_period)))
-  {
-    return fail("parameter 'diagnostic_period': must be > 0 s");
+    if (why != nullptr)
+      *why = "odom_frame and base_frame must differ (both '" + odom_frame + "')";
+    return false;
   }
   return true;
 }
@@ -155,32 +154,61 @@ bool RosOptions::validate(std::string* why) const
 bool readParameters(const ParameterSource& source, Parameters* params, std::string* why)
 {
   std::string message;
-  for (const std::string& key : source.keys())
+  const std::vector<std::string> present = source.keys();
+  for (const std::string& key : present)
   {
-    const auto& table = keyTable();
-    const auto it = std::find_if(table.begin(), table.end(), [&key](const Key& k) { return k.name == key; });
-    if (it == table.end())
-    {
-      *why = "unknown parameter '" + key + "' (see config/compensator.yaml for the keys)";
+    bool core = false, ros = false;
+    if (!readKey(source, key, compensatorParameters(), &params->core, &core, why) ||
+        (!core && !readKey(source, key, rosOptionParameters(), &params->ros, &ros, why)))
       return false;
-    }
-    if (!it->read(source, key, params, &message))
+    if (!core && !ros)
     {
-      *why = message;
+      *why = "unknown parameter '" + key + "' (docs/ros_api.md lists the keys)";
       return false;
     }
   }
-  if (!params->core.validate(&message))
+  if (!params->core.validate(&message, present))
   {
     *why = "invalid parameters: " + message;
     return false;
   }
   if (!params->ros.validate(&message))
   {
-    *why = message;
+    *why = "invalid parameters: " + message;
     return false;
   }
   return true;
+}
+
+bool applyTuning(const dynamic_reconfigure::Config& request, CompensatorConfig* config, std::string* why)
+{
+  return applyEntries(request.bools, config, why) && applyEntries(request.ints, config, why) &&
+         applyEntries(request.doubles, config, why) && applyEntries(request.strs, config, why);
+}
+
+void toTuning(const CompensatorConfig& config, dynamic_reconfigure::Config* message)
+{
+  for (const Parameter<CompensatorConfig>& parameter : compensatorParameters())
+  {
+    if (!parameter.reconfigurable())
+      continue;
+    const ParameterValue value = parameter.get(config);
+    switch (parameter.type)
+    {
+      case ParameterType::kBool:
+        put(&message->bools, parameter.key, std::get<bool>(value));
+        break;
+      case ParameterType::kInt:
+        put(&message->ints, parameter.key, std::get<int>(value));
+        break;
+      case ParameterType::kDouble:
+        put(&message->doubles, parameter.key, std::get<double>(value));
+        break;
+      case ParameterType::kString:
+        put(&message->strs, parameter.key, std::get<std::string>(value));
+        break;
+    }
+  }
 }
 
 RosParameterSource::RosParameterSource(const ros::NodeHandle& pnh) : ns_(pnh.getNamespace())

@@ -1,21 +1,29 @@
 // Wrapper pieces without a master: Imu -> ImuSample with a mounting rotation, the mounting
-// looked up in a tf2 buffer (node and compensate_bag), Odometry covariances (never -1, unknown ->
-// kUnknownCovariance), finite checks, the frame filter, the parameter table read from YAML (unknown key, wrong type, invalid value named), and the raw
-// double integration.
+// looked up in a tf2 buffer (node and compensate_bag), Odometry covariances (never -1, unknown
+// -> kUnknownCovariance), finite checks, the frame filter, the parameters read from YAML (unknown
+// key, wrong type, invalid value named), the parameter tables against config/compensator.yaml
+// (keys, defaults, [reconfigure] marks), cfg/Compensator.cfg (defaults, ranges, descriptions as
+// compiled) and docs/ros_api.md (generated section), the reconfigure message round trip, and the
+// raw double integration.
 #include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <limits>
+#include <map>
+#include <sstream>
 #include <string>
 
 #include <gtest/gtest.h>
 
+#include "periodic_bias_compensation/CompensatorConfig.h"
 #include "periodic_bias_compensation/ros/conversions.h"
 #include "periodic_bias_compensation/ros/mounting.h"
+#include "periodic_bias_compensation/ros/parameter_reference.h"
 #include "periodic_bias_compensation/ros/parameters.h"
 #include "periodic_bias_compensation/ros/raw_integrator.h"
 
 using namespace periodic_bias_compensation;
+using Tuning = periodic_bias_compensation_cfg::CompensatorConfig;
 
 namespace
 {
@@ -206,46 +214,59 @@ TEST(Conversions, FrameFilter)
   EXPECT_TRUE(fixed.accept("imu_a"));
 }
 
-TEST(Parameters, ShippedFileReadsAndKeepsTheCoreDefaults)
+/// Every key of config/compensator.yaml with whether the comment block above it marks it
+/// [reconfigure] (a block of comment lines covers the keys that follow it).
+std::map<std::string, bool> yamlKeysAndMarks(const std::string& path)
 {
+  std::map<std::string, bool> keys;
+  std::ifstream file(path);
+  std::string line, block;
+  bool after_key = true;
+  while (std::getline(file, line))
+  {
+    if (line.rfind("#", 0) == 0)
+    {
+      block = after_key ? line : block + line;
+      after_key = false;
+    }
+    else if (!line.empty())
+    {
+      keys[line.substr(0, line.find(':'))] = block.find("[reconfigure]") != std::string::npos;
+      after_key = true;
+    }
+  }
+  return keys;
+}
+
+template <class Config>
+void expectDefaults(const ParameterTable<Config>& table, const Config& read, std::map<std::string, bool>* yaml_keys)
+{
+  for (const Parameter<Config>& p : table)
+  {
+    const auto it = yaml_keys->find(p.key);
+    if (it == yaml_keys->end())
+    {
+      ADD_FAILURE() << "config/compensator.yaml lacks " << p.key;
+      continue;
+    }
+    EXPECT_EQ(p.get(read), p.defaultValue()) << p.key << ": the file says " << toString(p.get(read))
+                                             << ", the table's default is " << toString(p.defaultValue());
+    EXPECT_EQ(it->second, p.reconfigurable()) << p.key << ": [reconfigure] mark in config/compensator.yaml";
+    yaml_keys->erase(it);
+  }
+}
+
+TEST(Parameters, ShippedFileHoldsEveryKeyWithItsDefault)
+{
+  const std::string path = PBC_SOURCE_DIR "/config/compensator.yaml";
   Parameters params;
   std::string why;
-  ASSERT_TRUE(readParameters(YamlParameterSource(PBC_SOURCE_DIR "/config/compensator.yaml"), &params, &why)) << why;
-  // config/compensator.yaml documents the defaults: it must agree with the core's.
-  const CompensatorConfig defaults;
-  const CompensatorConfig& c = params.core;
-  EXPECT_EQ(c.mode, defaults.mode);
-  for (int i = 0; i < 3; ++i)
-  {
-    EXPECT_DOUBLE_EQ(c.gains[i].alpha_v, defaults.gains[i].alpha_v);
-    EXPECT_DOUBLE_EQ(c.gains[i].alpha_p, defaults.gains[i].alpha_p);
-    EXPECT_DOUBLE_EQ(c.gains[i].beta_v, defaults.gains[i].beta_v);
-    EXPECT_DOUBLE_EQ(c.gains[i].beta_p, defaults.gains[i].beta_p);
-  }
-  EXPECT_EQ(c.enable_constant, defaults.enable_constant);
-  EXPECT_EQ(c.enable_periodic, defaults.enable_periodic);
-  EXPECT_DOUBLE_EQ(c.calibration_duration, defaults.calibration_duration);
-  EXPECT_EQ(c.assume_static_calibration, defaults.assume_static_calibration);
-  EXPECT_DOUBLE_EQ(c.fft_window, defaults.fft_window);
-  EXPECT_DOUBLE_EQ(c.fft_hop, defaults.fft_hop);
-  EXPECT_DOUBLE_EQ(c.min_frequency, defaults.min_frequency);
-  EXPECT_DOUBLE_EQ(c.max_frequency, defaults.max_frequency);
-  EXPECT_DOUBLE_EQ(c.min_peak_ratio, defaults.min_peak_ratio);
-  EXPECT_EQ(c.harmonics, defaults.harmonics);
-  EXPECT_DOUBLE_EQ(c.harmonic_memory, defaults.harmonic_memory);
-  EXPECT_DOUBLE_EQ(c.drift_time_constant, defaults.drift_time_constant);
-  EXPECT_EQ(c.gyro_attitude, defaults.gyro_attitude);
-  EXPECT_DOUBLE_EQ(c.tilt_time_constant, defaults.tilt_time_constant);
-  EXPECT_EQ(c.estimate_gyro_bias, defaults.estimate_gyro_bias);
-  EXPECT_DOUBLE_EQ(c.gravity, defaults.gravity);
-  EXPECT_DOUBLE_EQ(c.max_gap, defaults.max_gap);
-  EXPECT_DOUBLE_EQ(c.max_rate_change, defaults.max_rate_change);
-  EXPECT_DOUBLE_EQ(c.max_quaternion_norm_error, defaults.max_quaternion_norm_error);
-  const RosOptions ros_defaults;
-  EXPECT_EQ(params.ros.odom_frame, ros_defaults.odom_frame);
-  EXPECT_EQ(params.ros.base_frame, ros_defaults.base_frame);
-  EXPECT_EQ(params.ros.path_max_length, ros_defaults.path_max_length);
-  EXPECT_DOUBLE_EQ(params.ros.path_rate, ros_defaults.path_rate);
+  ASSERT_TRUE(readParameters(YamlParameterSource(path), &params, &why)) << why;
+  std::map<std::string, bool> keys = yamlKeysAndMarks(path);
+  expectDefaults(compensatorParameters(), params.core, &keys);
+  expectDefaults(rosOptionParameters(), params.ros, &keys);
+  for (const auto& [key, mark] : keys)
+    ADD_FAILURE() << "config/compensator.yaml: '" << key << "' is in no parameter table";
 }
 
 TEST(Parameters, ErrorsNameTheKey)
@@ -259,7 +280,17 @@ TEST(Parameters, ErrorsNameTheKey)
   EXPECT_FALSE(readYaml("publish_tf: maybe\n", &params, &why));
   EXPECT_NE(why.find("publish_tf"), std::string::npos) << why;
   EXPECT_FALSE(readYaml("mode: fast\n", &params, &why));
-  EXPECT_NE(why.find("mode"), std::string::npos) << why;
+  EXPECT_NE(why.find("mode = 'fast' is not one of default, paper"), std::string::npos) << why;
+  EXPECT_FALSE(readYaml("min_frequency: 5\n", &params, &why));
+  EXPECT_NE(why.find("min_frequency = 5 must be below max_frequency = 2"), std::string::npos) << why;
+  EXPECT_FALSE(readYaml("max_frequency: 0.01\n", &params, &why));
+  EXPECT_NE(why.find("max_frequency = 0.01 must be above min_frequency = 0.05"), std::string::npos) << why;
+  EXPECT_FALSE(readYaml("fft_hop: 0.001\n", &params, &why));
+  EXPECT_NE(why.find("fft_hop = 0.001 is out of range [0.01, 3600]"), std::string::npos) << why;
+  EXPECT_FALSE(readYaml("path_max_length: 0\n", &params, &why));
+  EXPECT_NE(why.find("path_max_length = 0"), std::string::npos) << why;
+  EXPECT_FALSE(readYaml("base_frame: \"\"\n", &params, &why));
+  EXPECT_NE(why.find("base_frame must not be empty"), std::string::npos) << why;
   EXPECT_FALSE(readYaml("alpha_p_z: 3.0\n", &params, &why));
   EXPECT_NE(why.find("alpha_p_z"), std::string::npos) << why;
   EXPECT_FALSE(readYaml("path_rate: 0\n", &params, &why));
@@ -275,6 +306,161 @@ TEST(Parameters, ErrorsNameTheKey)
   EXPECT_EQ(ok.core.harmonics, 3);
   EXPECT_DOUBLE_EQ(ok.core.fft_window, 40.0);
   EXPECT_EQ(ok.ros.imu_frame, "imu_link");
+}
+
+namespace
+{
+/// The values of a reconfigure message by key.
+std::map<std::string, ParameterValue> values(const dynamic_reconfigure::Config& message)
+{
+  std::map<std::string, ParameterValue> result;
+  for (const auto& e : message.bools)
+    result[e.name] = static_cast<bool>(e.value);
+  for (const auto& e : message.ints)
+    result[e.name] = static_cast<int>(e.value);
+  for (const auto& e : message.doubles)
+    result[e.name] = static_cast<double>(e.value);
+  for (const auto& e : message.strs)
+    result[e.name] = e.value;
+  return result;
+}
+
+std::map<std::string, ParameterValue> values(const Tuning& tuning)
+{
+  dynamic_reconfigure::Config message;
+  tuning.__toMessage__(message);
+  return values(message);
+}
+
+std::string readFile(const std::string& path)
+{
+  std::ifstream file(path);
+  std::ostringstream text;
+  text << file.rdbuf();
+  return text.str();
+}
+}  // namespace
+
+// cfg/Compensator.cfg is declared apart from the table (dynamic_reconfigure runs it before any
+// C++ exists): what it compiled to must be the table, key by key.
+TEST(Parameters, ReconfigureDeclarationsAreTheTable)
+{
+  const auto defaults = values(Tuning::__getDefault__()), minima = values(Tuning::__getMin__()),
+             maxima = values(Tuning::__getMax__());
+  std::size_t run_time = 0;
+  for (const Parameter<CompensatorConfig>& p : compensatorParameters())
+  {
+    if (!p.reconfigurable())
+    {
+      EXPECT_EQ(defaults.count(p.key), 0u) << p.key << " is in cfg/Compensator.cfg but not a run-time parameter";
+      continue;
+    }
+    ++run_time;
+    const std::string hint = std::string("; refresh: ") + kRefreshCommand;
+    ASSERT_EQ(defaults.count(p.key), 1u) << p.key << " is missing from cfg/Compensator.cfg" << hint;
+    EXPECT_EQ(defaults.at(p.key), p.defaultValue()) << p.key << ": default" << hint;
+    if (p.type == ParameterType::kInt || p.type == ParameterType::kDouble)
+    {
+      const auto number = [](const ParameterValue& v) {
+        return typeOf(v) == ParameterType::kInt ? std::get<int>(v) : std::get<double>(v);
+      };
+      // int bounds: dynamic_reconfigure's defaults (INT_MIN, INT_MAX) stand for none.
+      const double none = p.type == ParameterType::kInt ? std::numeric_limits<int>::max() :
+                                                          std::numeric_limits<double>::infinity();
+      const double lowest = std::isinf(p.range.lowest()) ? -none : p.range.lowest();
+      const double highest = std::isinf(p.range.highest()) ? none : p.range.highest();
+      EXPECT_EQ(number(minima.at(p.key)), lowest) << p.key << ": min" << hint;
+      EXPECT_EQ(number(maxima.at(p.key)), highest) << p.key << ": max" << hint;
+    }
+    for (const auto& description : Tuning::__getParamDescriptions__())
+      if (description->name == p.key)
+      {
+        EXPECT_EQ(description->type, reconfigureType(p.type)) << p.key << hint;
+        EXPECT_EQ(description->description, reconfigureDescription(p)) << p.key << hint;
+      }
+  }
+  EXPECT_EQ(defaults.size(), run_time) << "cfg/Compensator.cfg declares a key that is in no table";
+  // The maximum a client is clamped to is one validate() accepts: alpha < 2.
+  EXPECT_LT(Tuning::__getMax__().alpha_v_x, 2.0);
+  CompensatorConfig at_max;
+  at_max.gains[0].alpha_v = Tuning::__getMax__().alpha_v_x;
+  std::string why;
+  EXPECT_TRUE(at_max.validate(&why)) << why;
+}
+
+TEST(Parameters, ReconfigureRoundTrip)
+{
+  CompensatorConfig config;
+  config.mode = Mode::kPaper;
+  config.gains[2].beta_v = 7.25;
+  config.harmonics = 3;
+  config.heave_filter = false;
+  config.gravity = 9.81;  // start-up only: not in a reconfigure message
+  dynamic_reconfigure::Config message;
+  Tuning::__getDefault__().__toMessage__(message);
+  toTuning(config, &message);
+  CompensatorConfig back;
+  std::string why;
+  ASSERT_TRUE(applyTuning(message, &back, &why)) << why;
+  EXPECT_EQ(back.mode, Mode::kPaper);
+  EXPECT_EQ(back.gains[2].beta_v, 7.25);
+  EXPECT_EQ(back.harmonics, 3);
+  EXPECT_FALSE(back.heave_filter);
+  EXPECT_EQ(back.gravity, CompensatorConfig().gravity);
+  for (const auto& change : changes(compensatorParameters(), config, back))
+    EXPECT_EQ(change.info->key, "gravity") << "lost on the way: " << change.info->key;
+  // The generated class reads the message back.
+  Tuning tuning;
+  ASSERT_TRUE(tuning.__fromMessage__(message));
+  EXPECT_EQ(tuning.mode, "paper");
+  EXPECT_EQ(tuning.beta_v_z, 7.25);
+
+  dynamic_reconfigure::StrParameter mode;
+  mode.name = "mode";
+  mode.value = "fast";
+  message.strs = { mode };
+  EXPECT_FALSE(applyTuning(message, &back, &why));
+  EXPECT_NE(why.find("mode = 'fast'"), std::string::npos) << why;
+  dynamic_reconfigure::DoubleParameter gravity;
+  gravity.name = "gravity";
+  gravity.value = 9.8;
+  message = dynamic_reconfigure::Config();
+  message.doubles = { gravity };
+  EXPECT_FALSE(applyTuning(message, &back, &why));
+  EXPECT_NE(why.find("'gravity' is not a run-time parameter"), std::string::npos) << why;
+}
+
+// docs/ros_api.md and cfg/Compensator.cfg hold text generated from the tables.
+TEST(Parameters, GeneratedTextIsCurrent)
+{
+  for (const GeneratedSection& section : generatedSections())
+  {
+    const std::string path = std::string(PBC_SOURCE_DIR) + "/" + section.file;
+    std::string generated;
+    ASSERT_TRUE(extractSection(readFile(path), section, &generated))
+        << path << " lacks the marker lines '" << section.begin_marker << "' / '" << section.end_marker << "'";
+    const std::string expected = section.generate();
+    if (generated == expected)
+    {
+      continue;
+    }
+    std::istringstream have(generated), want(expected);
+    std::string have_line, want_line;
+    int line = 0;
+    while (std::getline(have, have_line) && std::getline(want, want_line) && have_line == want_line)
+    {
+      ++line;
+    }
+    ADD_FAILURE() << section.file << " is not what the parameter tables give (line " << line + 1
+                  << " of the generated part:\n  file:   " << have_line << "\n  tables: " << want_line
+                  << ")\nrefresh it with\n  " << kRefreshCommand << "\n(<repository>: " << PBC_SOURCE_DIR << ")";
+  }
+  // The section replacement leaves the rest of a file alone.
+  const GeneratedSection& docs = generatedSections().front();
+  std::string updated;
+  ASSERT_TRUE(replaceSection("intro\n" + docs.begin_marker + "\nold\n" + docs.end_marker + "\nrest\n", docs, &updated));
+  EXPECT_EQ(updated, "intro\n" + docs.begin_marker + "\n" + docs.generate() + docs.end_marker + "\nrest\n");
+  EXPECT_FALSE(replaceSection("no markers\n", docs, &updated));
 }
 
 TEST(RawIntegrator, ConstantAccelerationAndRestarts)

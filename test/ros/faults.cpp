@@ -2,7 +2,7 @@
 // wall-time stamps), each checked in /diagnostics for a level and an operator-readable message,
 // and in the outputs (they keep coming, never a NaN):
 //   - constant input: "no period"; an oscillation: "locked"; constant again: "no period" again
-//   - an invalid gain through dynamic_reconfigure: WARN "reconfigure refused ..." naming the key
+//   - an empty band through dynamic_reconfigure: WARN "reconfigure refused ..." naming the key
 //   - orientation disappears mid-run: WARN "IMU orientation missing: levelling with the attitude
 //     integrated from the gyro"; comes back: cleared
 //   - the sample rate changes: WARN "IMU sample rate changed ..."
@@ -89,17 +89,19 @@ TEST(Faults, EachFaultShowsInDiagnosticsAndOutputsContinue)
       40.0);
   EXPECT_GE(s.level, 0) << "the period lock stayed on a constant input";
 
-  // An invalid gain while data flows: refused, visible, outputs continue.
+  // An invalid change while data flows (a gain beyond its range is clamped by
+  // dynamic_reconfigure; a band whose lower edge passes the upper one is the core's to refuse):
+  // refused, visible, outputs continue.
   dynamic_reconfigure::Client<Tuning> client("compensator");
   Tuning config;
   ASSERT_TRUE(client.getCurrentConfiguration(config, ros::Duration(20.0)));
   Tuning bad = config;
-  bad.alpha_v_x = 2.5;
+  bad.min_frequency = 5.0;
   ASSERT_TRUE(client.setConfiguration(bad));
   s = observer.waitForMessage("reconfigure refused", 10.0);
   EXPECT_EQ(s.level, DiagnosticStatus::WARN) << describe(s);
-  EXPECT_NE(s.message.find("alpha_v_x"), std::string::npos) << describe(s);
-  EXPECT_NE(s.values["last refused reconfigure"].find("alpha_v_x"), std::string::npos) << describe(s);
+  EXPECT_NE(s.message.find("min_frequency = 5 must be below max_frequency"), std::string::npos) << describe(s);
+  EXPECT_NE(s.values["last refused reconfigure"].find("min_frequency"), std::string::npos) << describe(s);
   EXPECT_TRUE(observer.waitForOdometry(50, 5.0)) << "outputs stopped after a refused reconfigure";
 
   // Orientation disappears mid-run, then comes back.

@@ -1,8 +1,12 @@
 // Run-time parameters and services of the compensator (nodelet in an external manager, through
 // launch/compensator.launch manager:=...):
 //   - a gain and the mode set through dynamic_reconfigure take effect (echoed by the server and
-//     on the parameter server; bias_state.mode follows)
-//   - an unstable gain and an empty frequency band are refused: the previous values come back
+//     on the parameter server; bias_state.mode follows), each change logged at INFO with its old
+//     and new value (read back from /rosout)
+//   - a gain beyond its range (alpha 1000) is clamped by dynamic_reconfigure to the advertised
+//     maximum, the largest value validate() accepts, and that is what the node reports and runs
+//   - a band that breaks min_frequency < max_frequency is refused as a whole, logged at WARN
+//     naming the changed key and the rule: the previous values come back
 //   - ~calibrate restarts the constant-bias window; ~save_calibration writes calibration_file
 //   - the IMU mounting comes from tf2: imu_link is published turned +90 deg about z on base_link,
 //     so a level IMU gives a base orientation of -90 deg about z in odometry/filtered
@@ -12,11 +16,14 @@
 #include <fstream>
 #include <mutex>
 #include <thread>
+#include <vector>
 
 #include <dynamic_reconfigure/client.h>
+#include <rosgraph_msgs/Log.h>
 #include <geometry_msgs/TransformStamped.h>
 #include <gtest/gtest.h>
 #include <nav_msgs/Odometry.h>
+#include <ros/master.h>
 #include <ros/ros.h>
 #include <tf2_ros/static_transform_broadcaster.h>
 #include <sensor_msgs/Imu.h>
@@ -108,28 +115,113 @@ private:
   periodic_bias_compensation::BiasState last_;
   std::size_t count_ = 0;
 };
+/// Publishers of /rosout known to the master (every node has one), -1 if it cannot be asked.
+int rosoutPublishers()
+{
+  XmlRpc::XmlRpcValue args, result, payload;
+  args[0] = ros::this_node::getName();
+  if (!ros::master::execute("getSystemState", args, result, payload, true))
+  {
+    return -1;
+  }
+  for (int i = 0; i < payload[0].size(); ++i)
+  {
+    if (static_cast<std::string>(payload[0][i][0]) == "/rosout")
+    {
+      return payload[0][i][1].size();
+    }
+  }
+  return 0;
+}
+
+/// Collects what the nodes log on /rosout (rostest starts no rosout node to aggregate it).
+class LogWatcher
+{
+public:
+  explicit LogWatcher(ros::NodeHandle& nh) : sub_(nh.subscribe("/rosout", 1000, &LogWatcher::callback, this))
+  {
+  }
+  void callback(const rosgraph_msgs::Log::ConstPtr& msg)
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    logs_.push_back(*msg);
+  }
+  /// Waits until connected to every node's /rosout (wall time) [s].
+  bool connected(double timeout)
+  {
+    const ros::WallTime start = ros::WallTime::now();
+    while ((ros::WallTime::now() - start).toSec() < timeout)
+    {
+      const int publishers = rosoutPublishers();
+      if (publishers > 0 && static_cast<int>(sub_.getNumPublishers()) >= publishers)
+      {
+        return true;
+      }
+      ros::WallDuration(0.05).sleep();
+    }
+    return false;
+  }
+  /// Waits for a message at `level` that contains `text` (wall time) [s].
+  bool waitFor(std::uint8_t level, const std::string& text, double timeout)
+  {
+    const ros::WallTime start = ros::WallTime::now();
+    while ((ros::WallTime::now() - start).toSec() < timeout)
+    {
+      {
+        std::lock_guard<std::mutex> lock(mutex_);
+        for (const auto& log : logs_)
+        {
+          if (log.level == level && log.msg.find(text) != std::string::npos)
+          {
+            return true;
+          }
+        }
+      }
+      ros::WallDuration(0.05).sleep();
+    }
+    return false;
+  }
+  std::string dump()
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    std::string text;
+    for (const auto& log : logs_)
+    {
+      text += "  [" + std::to_string(log.level) + "] " + log.msg + "\n";
+    }
+    return text;
+  }
+
+private:
+  ros::Subscriber sub_;
+  std::mutex mutex_;
+  std::vector<rosgraph_msgs::Log> logs_;
+};
 }  // namespace
 
 class Reconfigure : public testing::Test
 {
 protected:
-  Reconfigure() : feeder_(nh_), watcher_(nh_), client_("compensator") {}
+  Reconfigure() : feeder_(nh_), watcher_(nh_), logs_(nh_), client_("compensator") {}
 
   ros::NodeHandle nh_;
   ImuFeeder feeder_;
   BiasWatcher watcher_;
+  LogWatcher logs_;
   dynamic_reconfigure::Client<Tuning> client_;
 };
 
-TEST_F(Reconfigure, GainTakesEffectAndUnstableValuesAreRefused)
+TEST_F(Reconfigure, ChangesAreLoggedClampedOrRefused)
 {
+  using rosgraph_msgs::Log;
   Tuning config;
   ASSERT_TRUE(client_.getCurrentConfiguration(config, ros::Duration(20.0))) << "no reconfigure server";
   EXPECT_DOUBLE_EQ(config.alpha_v_x, 0.5);
   EXPECT_EQ(config.mode, "default");
   ASSERT_TRUE(watcher_.waitFor([](const auto& b) { return b.mode == "default"; }, 20.0)) << "no bias_state";
+  ASSERT_TRUE(logs_.connected(10.0)) << "not connected to every /rosout";
 
-  // Valid change: echoed by the server, on the parameter server, and in the behaviour.
+  // Valid change: echoed by the server, on the parameter server, in the behaviour and the log.
   config.alpha_v_x = 0.3;
   config.mode = "paper";
   ASSERT_TRUE(client_.setConfiguration(config));
@@ -140,30 +232,52 @@ TEST_F(Reconfigure, GainTakesEffectAndUnstableValuesAreRefused)
   EXPECT_DOUBLE_EQ(echoed, 0.3);
   EXPECT_TRUE(watcher_.waitFor([](const auto& b) { return b.mode == "paper"; }, 5.0))
       << "bias_state does not show the new mode";
+  EXPECT_TRUE(logs_.waitFor(Log::INFO, "reconfigure: alpha_v_x 0.5 -> 0.3", 5.0)) << logs_.dump();
+  EXPECT_TRUE(logs_.waitFor(Log::INFO, "reconfigure: mode default -> paper", 5.0)) << logs_.dump();
 
-  // Unstable gain (the comb loop diverges for alpha >= 2): refused, previous value back.
-  Tuning bad = config;
-  bad.alpha_v_x = 2.5;
-  ASSERT_TRUE(client_.setConfiguration(bad));
-  EXPECT_DOUBLE_EQ(bad.alpha_v_x, 0.3) << "the refused value was not reverted in the response";
+  // Beyond the range (the comb loop diverges for alpha >= 2): dynamic_reconfigure clamps it to
+  // the advertised maximum, which is the largest value the core accepts, so it runs as shown.
+  const double alpha_max = Tuning::__getMax__().alpha_v_x;
+  EXPECT_LT(alpha_max, 2.0);
+  EXPECT_GT(alpha_max, 1.99);
+  Tuning wild = config;
+  wild.alpha_v_x = 1000.0;
+  ASSERT_TRUE(client_.setConfiguration(wild));
+  EXPECT_EQ(wild.alpha_v_x, alpha_max) << "the server reports another value than the clamped one";
   ASSERT_TRUE(nh_.getParam("compensator/alpha_v_x", echoed));
-  EXPECT_DOUBLE_EQ(echoed, 0.3) << "the refused value reached the parameter server";
+  EXPECT_EQ(echoed, alpha_max);
+  Tuning current;
+  ASSERT_TRUE(client_.getCurrentConfiguration(current, ros::Duration(5.0)));
+  EXPECT_EQ(current.alpha_v_x, alpha_max);
+  EXPECT_TRUE(logs_.waitFor(Log::INFO, "reconfigure: alpha_v_x 0.3 -> 1.9999999999999998", 5.0)) << logs_.dump();
+  ASSERT_TRUE(client_.setConfiguration(config));
+  EXPECT_DOUBLE_EQ(config.alpha_v_x, 0.3);
 
-  // Out of range beta and an empty frequency band: refused as a whole.
-  bad = config;
-  bad.beta_v_y = 50.0;
+  // A band whose lower edge passes the upper one: refused as a whole, the previous values back,
+  // and the warning names the key that was changed.
+  Tuning bad = config;
+  bad.min_frequency = 5.0;
   bad.alpha_p_z = 0.2;
   ASSERT_TRUE(client_.setConfiguration(bad));
-  EXPECT_DOUBLE_EQ(bad.beta_v_y, config.beta_v_y);
+  EXPECT_DOUBLE_EQ(bad.min_frequency, config.min_frequency) << "the refused value was not reverted in the response";
   EXPECT_DOUBLE_EQ(bad.alpha_p_z, config.alpha_p_z) << "part of a refused request was applied";
+  ASSERT_TRUE(nh_.getParam("compensator/min_frequency", echoed));
+  EXPECT_DOUBLE_EQ(echoed, config.min_frequency) << "the refused value reached the parameter server";
+  EXPECT_TRUE(logs_.waitFor(Log::WARN,
+                            "reconfigure of alpha_p_z, min_frequency refused, keeping the previous parameters: "
+                            "min_frequency = 5 must be below max_frequency = 2",
+                            5.0))
+      << logs_.dump();
   bad = config;
   bad.max_frequency = 0.01;
   ASSERT_TRUE(client_.setConfiguration(bad));
   EXPECT_DOUBLE_EQ(bad.max_frequency, config.max_frequency);
+  EXPECT_TRUE(logs_.waitFor(Log::WARN, "max_frequency = 0.01 must be above min_frequency = 0.05", 5.0))
+      << logs_.dump();
 
-  Tuning current;
   ASSERT_TRUE(client_.getCurrentConfiguration(current, ros::Duration(5.0)));
   EXPECT_DOUBLE_EQ(current.alpha_v_x, 0.3);
+  EXPECT_DOUBLE_EQ(current.min_frequency, config.min_frequency);
   EXPECT_EQ(current.mode, "paper");
 
   // Still running with the last good configuration.

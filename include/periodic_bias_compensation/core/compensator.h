@@ -11,6 +11,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include <Eigen/Geometry>
 
@@ -57,14 +58,14 @@ bool modeFromString(const std::string& name, Mode* mode);
 /// Gains of Eq. 6-7 for one axis (paper Table 3 gives the defaults).
 struct AxisGains
 {
-  double alpha_v = 0.5;  ///< velocity error gain [-], 0 < alpha_v < 1 (or 2: see validate)
+  double alpha_v = 0.5;  ///< velocity error gain [-] (range: compensatorParameters())
   double alpha_p = 0.5;  ///< position error gain [-]
   double beta_v = 6.0;   ///< periodic offset gain, velocity [-]
   double beta_p = 2.0;   ///< periodic offset gain, position [-]
 };
 
-/// Everything that configures a Compensator. Defaults are those documented in
-/// config/compensator.yaml.
+/// Everything that configures a Compensator. Key, range, unit and meaning of every field:
+/// compensatorParameters() (core/parameter_table.h), listed in docs/ros_api.md.
 struct CompensatorConfig
 {
   Mode mode = Mode::kDefault;
@@ -102,9 +103,11 @@ struct CompensatorConfig
   double max_rate_change = 0.2;  ///< relative sample-rate change that re-plans the FFT [-]
   double max_quaternion_norm_error = 0.01;  ///< |1 - |q|| above this rejects the sample [-]
 
-  /// Checks ranges and loop stability. On failure returns false and, if why != nullptr,
-  /// writes a message naming the offending key.
-  bool validate(std::string* why) const;
+  /// Checks every key's range (compensatorParameters(), which holds the loop stability limits)
+  /// and the rules between keys (compensatorOrderRules()). On failure returns false and, if
+  /// why != nullptr, writes a message naming the offending key; a rule between two keys names
+  /// first the one among `changed` (the keys the user set), when the caller knows them.
+  bool validate(std::string* why, const std::vector<std::string>& changed = {}) const;
 };
 
 /// One IMU sample. REP-145: specific force including gravity, in the sensor frame.

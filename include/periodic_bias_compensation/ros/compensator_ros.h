@@ -72,6 +72,8 @@ private:
   void appendPaths(const ros::Time& stamp, const CompensatorOutput& out);
   void clearPaths();
   void reconfigure(TuningConfig& config, uint32_t level);
+  /// Writes the running configuration's run-time parameters into *config.
+  void showRunningConfig(TuningConfig* config) const;
   bool calibrate(std_srvs::Trigger::Request& req, std_srvs::Trigger::Response& res);
   bool saveCalibration(std_srvs::Trigger::Request& req, std_srvs::Trigger::Response& res);
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat);

@@ -1,16 +1,19 @@
 // Parameters of the compensator, read with the same keys from the ROS parameter server (node,
-// nodelet) and from a YAML file (compensate_bag). Every key is documented in
-// config/compensator.yaml.
+// nodelet) and from a YAML file (compensate_bag), and changed at run time through
+// dynamic_reconfigure. The keys are those of two tables: compensatorParameters() (the core's
+// CompensatorConfig) and rosOptionParameters() (RosOptions below); docs/ros_api.md lists them.
 #pragma once
 
 #include <memory>
 #include <string>
 #include <vector>
 
+#include <dynamic_reconfigure/Config.h>
 #include <ros/node_handle.h>
 #include <yaml-cpp/yaml.h>
 
 #include "periodic_bias_compensation/core/compensator.h"
+#include "periodic_bias_compensation/core/parameter_table.h"
 
 namespace periodic_bias_compensation
 {
@@ -28,9 +31,13 @@ struct RosOptions
   std::string calibration_file;         ///< constant-bias YAML; loaded at start when it exists
   double diagnostic_period = 1.0;       ///< period of /diagnostics (read by diagnostic_updater) [s]
 
-  /// False with a message naming the key when a value is out of range.
+  /// False with a message naming the key when a value is out of range (rosOptionParameters())
+  /// or odom_frame equals base_frame.
   bool validate(std::string* why) const;
 };
+
+/// Every key of RosOptions, in the order of config/compensator.yaml.
+const ParameterTable<RosOptions>& rosOptionParameters();
 
 /// Everything read at start-up.
 struct Parameters
@@ -57,6 +64,15 @@ public:
 /// wrong type or an invalid value (core CompensatorConfig::validate, RosOptions::validate) gives
 /// false with a message naming the key; *params is then unspecified.
 bool readParameters(const ParameterSource& source, Parameters* params, std::string* why);
+
+/// dynamic_reconfigure (cfg/Compensator.cfg declares the run-time keys of compensatorParameters()
+/// with the table's defaults and ranges; test_ros_conversions checks that it does).
+/// Writes every value of a request into *config. False with a message naming the key for a key
+/// that is not a run-time parameter of the table, a value of another type or an unknown mode;
+/// *config is then partly written. Ranges are left to CompensatorConfig::validate.
+bool applyTuning(const dynamic_reconfigure::Config& request, CompensatorConfig* config, std::string* why);
+/// The inverse: the run-time parameters of `config` written over the values in *message.
+void toTuning(const CompensatorConfig& config, dynamic_reconfigure::Config* message);
 
 /// The private namespace of a node or nodelet on the parameter server.
 class RosParameterSource : public ParameterSource
