@@ -232,10 +232,13 @@ bool CompensatorRos::updateMounting(const sensor_msgs::Imu& msg)
 {
   if (mounting_state_ != MountingState::kWaiting)
   {
-    if (mounting_state_ == MountingState::kFallback)
+    // Repeated once a minute of wall time after the first WARN (rosconsole's delayed throttle
+    // starts from ros::Time, which jumps when a bag's clock starts: a second WARN at once).
+    if (mounting_state_ == MountingState::kFallback && ros::WallTime::now() - mounting_warned_ > ros::WallDuration(60.0))
     {
-      ROS_WARN_DELAYED_THROTTLE(60.0, "no transform %s -> %s: using the identity as IMU mounting",
-                        msg.header.frame_id.c_str(), params_.ros.base_frame.c_str());
+      mounting_warned_ = ros::WallTime::now();
+      ROS_WARN("no transform %s -> %s: using the identity as IMU mounting", msg.header.frame_id.c_str(),
+               params_.ros.base_frame.c_str());
     }
     return true;
   }
@@ -266,6 +269,7 @@ bool CompensatorRos::updateMounting(const sensor_msgs::Imu& msg)
     return false;
   }
   mounting_state_ = MountingState::kFallback;
+  mounting_warned_ = ros::WallTime::now();
   ROS_WARN("no transform %s -> %s after %.1f s (%s): using the identity as IMU mounting", imu_frame.c_str(),
            params_.ros.base_frame.c_str(), params_.ros.mount_timeout, lookup.why.c_str());
   return true;
@@ -623,11 +627,15 @@ void CompensatorRos::diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat)
   stat.add("non-finite outputs suppressed", counters_.nonfinite_outputs);
   stat.add("rejected out of range", counters_.rejected_out_of_range);
   stat.add("accepted without orientation", counters_.without_orientation);
-  stat.add("orientation", !seen_orientation_ ? "none in the input: levelled with the " +
-                                                   toString(compensator_->levelSource())
-                                             : (has_orientation_ ? std::string("from the IMU message")
-                                                                 : "missing: levelled with the " +
-                                                                       toString(compensator_->levelSource())));
+  std::string orientation = "no input yet";
+  if (counters_.received > 0 && has_orientation_)
+    orientation = "from the IMU message";
+  else if (counters_.received > 0)
+    orientation = std::string(seen_orientation_ ? "missing" : "none in the input") +
+                  (compensator_->levelSource() == LevelSource::kNone
+                       ? ": not levelled yet"
+                       : ": levelled with the " + toString(compensator_->levelSource()));
+  stat.add("orientation", orientation);
   if (compensator_->levelSource() == LevelSource::kGyroAttitude)
   {
     const Vector3 b = compensator_->gyroBias();

@@ -324,7 +324,7 @@ public:
       {
         if (!connection.copy)
         {
-          connection.copy = out.addConnection(m.getTopic(), *header);
+          connection.copy = out.addConnection(absoluteTopic(m.getTopic()), *header);  // named as the outputs
         }
         out.write(*connection.copy, m.getTime(), m);
       }

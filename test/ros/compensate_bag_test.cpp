@@ -304,6 +304,14 @@ TEST_F(CompensateBag, OutputsChoosesTheTopicsWritten)
   EXPECT_NE(r.output.find("compensate_bag: 100% ("), std::string::npos) << r.output;
   const Contents everything = readContents(all);
   ASSERT_EQ(everything.size(), 6u);
+  {
+    // Every topic written absolute, as rosbag record names them: outputs and copies alike.
+    rosbag::Bag bag(all, rosbag::bagmode::Read);
+    for (const rosbag::ConnectionInfo* c : rosbag::View(bag).getConnections())
+    {
+      EXPECT_EQ(c->topic.front(), '/') << c->topic;
+    }
+  }
 
   const std::string filtered = dir_ + "/filtered.bag";
   r = run(std::string("--in ") + PBC_BENCH_BAG + " --out " + filtered + " --outputs filtered");

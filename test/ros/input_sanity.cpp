@@ -180,6 +180,12 @@ TEST(InputSanity, DiagnosticsSayWhatIsWrongWithTheInput)
   for (const char* ns : { "units", "zero_quaternion", "empty_frame", "refused", "normal" })
     watcher.watch(ns);
 
+  // Before any input the diagnostics say so (not a levelling that has not happened).
+  const ros::WallTime first_diagnostics = ros::WallTime::now() + ros::WallDuration(20.0);
+  while (watcher.value("normal", "orientation").empty() && ros::WallTime::now() < first_diagnostics)
+    ros::WallDuration(0.1).sleep();
+  EXPECT_EQ(watcher.value("normal", "orientation"), "no input yet");
+
   // 5 s: each compensator calibrates (1 s window) and runs; diagnostics come every second.
   publishAll(nh, 5.0);
   ros::WallDuration(1.5).sleep();
@@ -194,6 +200,8 @@ TEST(InputSanity, DiagnosticsSayWhatIsWrongWithTheInput)
   EXPECT_EQ(watcher.seen("zero_quaternion", error), "");
   EXPECT_EQ(watcher.value("zero_quaternion", "rejected bad quaternion"), "0");
   EXPECT_NE(watcher.value("zero_quaternion", "accepted without orientation"), "0");
+  EXPECT_EQ(watcher.value("zero_quaternion", "orientation").rfind("none in the input: levelled with the ", 0), 0u)
+      << watcher.value("zero_quaternion", "orientation");
 
   // The empty, unusable first message does not fix the frame: the rest is used, and the frame
   // learnt is that of the first message used.
@@ -210,6 +218,7 @@ TEST(InputSanity, DiagnosticsSayWhatIsWrongWithTheInput)
   // bias state says it is tracking.
   EXPECT_GT(watcher.odometry("normal"), 100u);
   EXPECT_EQ(watcher.level("normal"), DiagnosticStatus::OK) << watcher.message("normal");
+  EXPECT_EQ(watcher.value("normal", "orientation"), "from the IMU message");
   EXPECT_EQ(watcher.state("normal"), periodic_bias_compensation::BiasState::STATE_TRACKING);
 }
 

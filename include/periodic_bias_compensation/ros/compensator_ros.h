@@ -96,6 +96,7 @@ private:
   FrameFilter frame_filter_;
   Mounting mounting_;
   MountingState mounting_state_ = MountingState::kWaiting;
+  ros::WallTime mounting_warned_;  ///< when the identity mounting was last said (WARN)
   double first_stamp_ = -1.0;  ///< stamp of the first message [s], for mount_timeout
   tf2_ros::Buffer tf_buffer_;
   std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
