@@ -29,6 +29,7 @@ void BroadbandWave::reset()
   residual_samples_ = 0.0;
   samples_ = 0.0;
   weight_ = 0.0;
+  spectral_share_ = 0.0;
   low_ = {};
   low_variance_ = 0.0;
   previous_raw_ = NAN;
@@ -41,17 +42,23 @@ BroadbandWaveOutput BroadbandWave::update(const BroadbandWaveInput& in)
   BroadbandWaveOutput out;
   out.estimate = fixed_.update(in.offset_free, dt);
   // Once the spectrum has been measured, the Wiener filter designed from it replaces the fixed
-  // filter's displacement and velocity (its acceleration is the wave band's either way).
+  // filter's displacement and velocity (its acceleration is the wave band's either way); a design
+  // made stale by a turn hands back to the fixed filter, both with WienerHeave::kDesignFade.
   const double density = noiseDensitySquared(in.rate);
+  if (in.turning && vertical_)
+    spectral_.restartRecord();
   const WienerHeaveOutput spectral = spectral_.update(in.offset_free, dt, density);
+  if (dt > 0.0)
+    spectral_share_ += (1.0 - std::exp(-dt / WienerHeave::kDesignFade)) * ((spectral.valid ? 1.0 : 0.0) - spectral_share_);
   out.position_variance = fixed_.positionVariance(density);
   out.velocity_variance = fixed_.velocityVariance(density);
-  if (spectral.valid)
+  if (spectral_share_ > 0.0)
   {
-    out.estimate.position = spectral.position;
-    out.estimate.velocity = spectral.velocity;
-    out.position_variance = spectral.error_variance;
-    out.velocity_variance = spectral.velocity_error_variance;
+    const double share = spectral_share_;
+    out.estimate.position += share * (spectral.position - out.estimate.position);
+    out.estimate.velocity += share * (spectral.velocity - out.estimate.velocity);
+    out.position_variance += share * (spectral.error_variance - out.position_variance);
+    out.velocity_variance += share * (spectral.velocity_error_variance - out.velocity_variance);
   }
   if (dt > 0.0)
   {

@@ -790,6 +790,7 @@ private:
     in.residual = residual;
     in.locked = axis.locked;
     in.allowed = since_turn_ >= kAfterTurn;
+    in.turning = std::abs(turn_rate_) > kTurnRate;
     in.dt = dt;
     in.rate = rate_;
     const BroadbandWaveOutput out = axis.broadband.update(in);

@@ -80,6 +80,14 @@ void WienerHeave::reset()
   previous_.reset();
   fade_ = 1.0;
   peak_frequency_ = 0.0;
+  stale_ = false;
+}
+
+void WienerHeave::restartRecord()
+{
+  decimated_.clear();
+  since_design_ = 0.0;
+  stale_ = current_ != nullptr;
 }
 
 WienerHeaveOutput WienerHeave::update(double a, double dt, double noise_density_squared)
@@ -123,7 +131,7 @@ WienerHeaveOutput WienerHeave::update(double a, double dt, double noise_density_
   }
   since_design_ += dt_;
   const double recorded = decimated_.size() * decimation_ * dt_;
-  if ((current_ ? since_design_ >= kRedesignInterval : recorded >= kFirstDesign) &&
+  if ((current_ && !stale_ ? since_design_ >= kRedesignInterval : recorded >= kFirstDesign) &&
       static_cast<int>(decimated_.size()) >= kMinSegment)
   {
     design(noise_density_squared);
@@ -144,7 +152,7 @@ WienerHeaveOutput WienerHeave::update(double a, double dt, double noise_density_
     if (fade_ >= 1.0)
       previous_.reset();
   }
-  out.valid = true;
+  out.valid = !stale_;
   return out;
 }
 
@@ -256,6 +264,7 @@ void WienerHeave::design(double noise_density_squared)
     none->mean = mean;
     previous_ = std::move(current_);
     current_ = std::move(none);
+    stale_ = false;
     fade_ = previous_ ? 0.0 : 1.0;
     return;
   }
@@ -293,6 +302,7 @@ void WienerHeave::design(double noise_density_squared)
   next->mean = mean;
   previous_ = std::move(current_);
   current_ = std::move(next);
+  stale_ = false;
   fade_ = previous_ ? 0.0 : 1.0;
 }
 

@@ -3,10 +3,12 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <random>
 #include <vector>
 
 #include "periodic_bias_compensation/core/broadband_wave.h"
+#include "periodic_bias_compensation/core/heave_filter.h"
 
 namespace periodic_bias_compensation
 {
@@ -131,6 +133,58 @@ TEST(BroadbandWave, HorizontalOnlySpectralAndBlockable)
   largest = 0.0;
   feed(&wave, &sea, 60.0, false, &t, &rng, &largest);
   EXPECT_LT(largest, 0.05);
+}
+
+// A turn changes every encounter frequency: the vertical axis crosses over to the fixed filter
+// without a step while the spectrum is measured anew, and back once the new record gives a design.
+TEST(BroadbandWave, TurnHandsTheVerticalToTheFixedFilterAndBack)
+{
+  const BroadSea sea(0.5, 4);
+  BroadbandWave wave(true);
+  HeaveFilter fixed;  // the same corner as BroadbandWave's own
+  std::mt19937_64 rng(4);
+  std::normal_distribution<double> normal(0.0, 0.004 * std::sqrt(kRate / 2.0));
+  const double dt = 1.0 / kRate, turn_start = 400.0, turn_end = 430.0;
+  double previous = 0.0, largest_step_before = 0.0, largest_step_turn = 0.0;
+  double fixed_gap_turn = 0.0, fixed_gap_after = 0.0, error2 = 0.0, fixed_error2 = 0.0, truth2 = 0.0;
+  for (long i = 0; i < static_cast<long>(800 * kRate); ++i)
+  {
+    const double t = i * dt;
+    double x, a;
+    sea.at(t, &x, &a);
+    BroadbandWaveInput in;
+    in.raw = a + normal(rng);
+    in.offset_free = in.raw;
+    in.residual = in.raw;
+    in.locked = true;
+    in.turning = t >= turn_start && t < turn_end;
+    in.dt = i > 0 ? dt : 0.0;
+    in.rate = kRate;
+    const double position = wave.update(in).estimate.position;
+    const double fixed_position = fixed.update(in.offset_free, in.dt).position;
+    const double step = std::abs(position - previous);
+    previous = position;
+    if (t > 300.0 && t < turn_start)
+      largest_step_before = std::max(largest_step_before, step);
+    if (t >= turn_start && t < turn_start + 10.0)
+      largest_step_turn = std::max(largest_step_turn, step);
+    if (t > turn_start + 15.0 && t < turn_end)
+      fixed_gap_turn = std::max(fixed_gap_turn, std::abs(position - fixed_position));
+    if (t > turn_end + WienerHeave::kFirstDesign + 15.0)
+      fixed_gap_after = std::max(fixed_gap_after, std::abs(position - fixed_position));
+    if (t > turn_end + 180.0)  // the first designs of a new record are coarse
+    {
+      fixed_error2 += (fixed_position - x) * (fixed_position - x);
+      error2 += (position - x) * (position - x);
+      truth2 += x * x;
+    }
+  }
+  EXPECT_LT(largest_step_turn, 1.5 * largest_step_before) << "no step at the hand-over";
+  EXPECT_LT(fixed_gap_turn, 0.01) << "the fixed filter's output while the ship turns";
+  EXPECT_GT(fixed_gap_after, 0.05) << "the spectral estimate is back";
+  EXPECT_LT(std::sqrt(error2 / truth2), 0.15);
+  EXPECT_LT(error2, 0.5 * fixed_error2);
+  std::printf("error from 180 s after the turn: spectral %.3f, fixed filter %.3f of the RMS\n", std::sqrt(error2 / truth2), std::sqrt(fixed_error2 / truth2));
 }
 
 }  // namespace periodic_bias_compensation

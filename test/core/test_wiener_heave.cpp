@@ -187,6 +187,36 @@ TEST(WienerHeave, FirstDesignResetAndCopy)
   EXPECT_EQ(heave.peakFrequency(), 0.0);
 }
 
+// After restartRecord() (a turn) the last design stays applied but is stale until one from the
+// new record, kFirstDesign of it; that design describes the sea met since, not the one before.
+TEST(WienerHeave, RestartRecordDesignsFromTheSeaMetSince)
+{
+  const Sea before(1.0 / 8.0, 1.8, 11), after(1.0 / 4.0, 1.0, 12);
+  const double rate = 20.0, dt = 1.0 / rate;
+  WienerHeave heave(0.03);
+  double x, v, a;
+  for (long i = 0; i < static_cast<long>(300 * rate); ++i)
+  {
+    before.at(i * dt, &x, &v, &a);
+    heave.update(a, dt, 1e-5);
+  }
+  ASSERT_NEAR(heave.peakFrequency(), 1.0 / 8.0, 0.4 / 8.0);
+  heave.restartRecord();
+  double first_valid = -1.0, stale_output = 0.0;
+  for (long i = 0; i < static_cast<long>(90 * rate); ++i)
+  {
+    after.at(300.0 + i * dt, &x, &v, &a);
+    const WienerHeaveOutput out = heave.update(a, dt, 1e-5);
+    if (out.valid && first_valid < 0.0)
+      first_valid = i * dt;
+    if (!out.valid)
+      stale_output = std::max(stale_output, std::abs(out.position));
+  }
+  EXPECT_NEAR(first_valid, WienerHeave::kFirstDesign, 1.0);
+  EXPECT_GT(stale_output, 0.0) << "the stale design is still applied (for the owner's fade)";
+  EXPECT_NEAR(heave.peakFrequency(), 1.0 / 4.0, 0.4 / 4.0);
+}
+
 // A sample period no IMU has (a glitch, a fuzzed stream) sizes nothing: no output, no throw.
 TEST(WienerHeave, AbsurdPeriodsAreIgnored)
 {

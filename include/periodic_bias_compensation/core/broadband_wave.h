@@ -17,7 +17,9 @@
 //  - the broadband share V_missed / (V_missed + V_broadband), zero below kMinWeight, is followed
 //    with kWeightTime: a narrow sea (the bench) or none (at rest) keeps the harmonic model
 //    whatever the bias does; a broad one (JONSWAP) takes the broadband estimate.
-// A horizontal axis takes the spectral estimate only, and none while the owner says it may not
+// While the ship turns, the spectrum is measured anew (WienerHeave::restartRecord); the vertical
+// axis crosses over to the fixed filter with WienerHeave::kDesignFade and back once the new record
+// gives a design. A horizontal axis takes the spectral estimate only, and none while the owner says it may not
 // (a ship turning, no attitude): its share then fades out with kBlockedFade.
 //
 // Threading: not thread-safe; the owner serialises calls.
@@ -39,6 +41,7 @@ struct BroadbandWaveInput
   double residual = 0.0;     ///< what the harmonic model leaves of the acceleration [m/s^2]
   bool locked = false;       ///< the harmonic model has a lock
   bool allowed = true;       ///< a horizontal axis may take a broadband share now
+  bool turning = false;      ///< the ship turns: the sea as met changes, its spectrum is measured anew
   double dt = 0.0;           ///< [s] since the previous sample (0: the first)
   double rate = 0.0;         ///< sample rate [Hz] (0: not known yet)
 };
@@ -98,6 +101,7 @@ private:
   double residual_samples_ = 0.0;            ///< in residual_band_variance_ since the lock
   double samples_ = 0.0;                     ///< in noise_variance_ and low_variance_
   double weight_ = 0.0;
+  double spectral_share_ = 0.0;              ///< of the spectral estimate against the fixed filter
   std::array<double, 2> low_{};              ///< the broadband output below the wave band
   double low_variance_ = 0.0;
   double previous_raw_ = NAN;

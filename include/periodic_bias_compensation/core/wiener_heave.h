@@ -36,7 +36,7 @@ class RealFft;
 /// One step's output of WienerHeave.
 struct WienerHeaveOutput
 {
-  bool valid = false;         ///< false until the first design
+  bool valid = false;         ///< false until the first design, and while it is stale
   double position = 0.0;      ///< wave displacement [m]
   double velocity = 0.0;      ///< [m/s]
   double error_variance = 0.0;  ///< the design's expected displacement error variance [m^2]
@@ -66,6 +66,10 @@ public:
 
   /// Forgets everything; the next sample starts a new record.
   void reset();
+  /// The sea as met has changed (the ship turned, so every encounter frequency moved): the
+  /// spectrum is measured anew from the next sample. The last design stays applied but is marked
+  /// stale (`valid` false) until the first design from the new record, kFirstDesign of it.
+  void restartRecord();
   void setMinFrequency(double min_frequency);
 
   /// Takes the vertical acceleration a [m/s^2] (gravity removed), the sample period dt [s]
@@ -111,6 +115,7 @@ private:
   // Design-rate values, oldest first, at most kDesignWindow.
   std::vector<double> decimated_;
   double since_design_ = 0.0;
+  bool stale_ = false;  ///< the design is from a record restartRecord() ended
   // Designs are never changed once made: copies of this object share them.
   std::shared_ptr<const Design> current_, previous_;
   double fade_ = 1.0;  ///< weight of current_ against previous_
