@@ -26,6 +26,7 @@ void BroadbandWave::reset()
   residual_heave_.reset();
   residual_high_ = {};
   residual_band_variance_ = 0.0;
+  difference_variance_ = 0.0;
   residual_samples_ = 0.0;
   samples_ = 0.0;
   weight_ = 0.0;
@@ -89,6 +90,9 @@ BroadbandWaveOutput BroadbandWave::update(const BroadbandWaveInput& in)
       residual_samples_ += 1.0;
       residual_band_variance_ +=
           std::max(minute, 1.0 / residual_samples_) * (missed * missed - residual_band_variance_);
+      const double difference = in.harmonic_position - out.estimate.position;
+      difference_variance_ +=
+          std::max(minute, 1.0 / residual_samples_) * (difference * difference - difference_variance_);
     }
     const double low = 1.0 - std::exp(-dt * M_PI * min_frequency_);
     double below = out.estimate.position;
@@ -105,6 +109,13 @@ BroadbandWaveOutput BroadbandWave::update(const BroadbandWaveInput& in)
       std::max(0.0, residual_band_variance_ - noiseDensitySquared(in.rate) / (8.0 * omega_h * omega_h * omega_h));
   const double broadband = out.position_variance + std::max(low_variance_, low_.back() * low_.back());
   double target = missed > 0.0 ? missed / (missed + broadband) : 0.0;
+  // The residual sees only the wave band: bias wander below it never opens the share. But a model
+  // locked elsewhere fits the acceleration and still turns it into the wrong displacement (it
+  // divides by its own frequency squared), and the high-passes take part of a swell near the
+  // band's edge. Once the residual opens the share, the displacements' difference sizes it:
+  // E[(x_harmonic - x_broadband)^2] = V_missed + V_broadband for independent errors.
+  if (target >= kMinWeight && difference_variance_ > broadband)
+    target = std::max(target, 1.0 - broadband / difference_variance_);
   const bool blocked = !vertical_ && !in.allowed;
   if (!vertical_ && (!spectral.valid || blocked))
     target = 0.0;

@@ -788,6 +788,7 @@ private:
     // the drift observer): gravity mismatch and bias are no step into the filters at their start.
     in.offset_free = offsetFree(raw, i);
     in.residual = residual;
+    in.harmonic_position = *wave_x;
     in.locked = axis.locked;
     in.allowed = since_turn_ >= kAfterTurn;
     in.turning = std::abs(turn_rate_) > kTurnRate;

@@ -187,4 +187,58 @@ TEST(BroadbandWave, TurnHandsTheVerticalToTheFixedFilterAndBack)
   std::printf("error from 180 s after the turn: spectral %.3f, fixed filter %.3f of the RMS\n", std::sqrt(error2 / truth2), std::sqrt(fixed_error2 / truth2));
 }
 
+// A long swell that the harmonic model, locked to a shorter period, fits in acceleration but
+// turns into far too little displacement (it divides by its own frequency squared): the
+// acceleration residual is small, the displacement error large. The share weighs the difference
+// of the two displacements, so the broadband estimate takes over.
+TEST(BroadbandWave, ModelLockedElsewhereGivesWayToTheBroadbandEstimate)
+{
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::normal_distribution<double> normal(0.0, 0.004 * std::sqrt(kRate / 2.0));
+  std::vector<double> frequency, phase;
+  for (int k = 0; k < 20; ++k)
+  {
+    frequency.push_back(0.055 + 0.02 * (k + u(rng)) / 20.0);
+    phase.push_back(2.0 * M_PI * u(rng));
+  }
+  const double amplitude = 0.5 * std::sqrt(2.0 / 20.0), locked = 2.0 * M_PI * 0.18;
+  BroadbandWave wave(true);
+  double blended2 = 0.0, broadband2 = 0.0, harmonic2 = 0.0, smallest_weight = 1.0;
+  const double dt = 1.0 / kRate;
+  for (long i = 0; i < static_cast<long>(900 * kRate); ++i)
+  {
+    const double t = i * dt;
+    double x = 0.0, a = 0.0;
+    for (size_t k = 0; k < frequency.size(); ++k)
+    {
+      const double w = 2.0 * M_PI * frequency[k], s = amplitude * std::sin(w * t + phase[k]);
+      x += s;
+      a -= w * w * s;
+    }
+    BroadbandWaveInput in;
+    in.raw = a + normal(rng);
+    in.offset_free = in.raw;
+    in.residual = 0.2 * a;
+    in.harmonic_position = -0.8 * a / (locked * locked);
+    in.locked = true;
+    in.dt = i > 0 ? dt : 0.0;
+    in.rate = kRate;
+    const BroadbandWaveOutput out = wave.update(in);
+    if (t < 300.0)
+      continue;
+    const double blended = in.harmonic_position + out.weight * (out.estimate.position - in.harmonic_position);
+    blended2 += (blended - x) * (blended - x);
+    broadband2 += (out.estimate.position - x) * (out.estimate.position - x);
+    harmonic2 += (in.harmonic_position - x) * (in.harmonic_position - x);
+    smallest_weight = std::min(smallest_weight, out.weight);
+  }
+  std::printf("model locked elsewhere: smallest share %.2f, RMS error blended %.3f, broadband %.3f, "
+              "harmonic %.3f m\n",
+              smallest_weight, std::sqrt(blended2 / (600 * kRate)), std::sqrt(broadband2 / (600 * kRate)),
+              std::sqrt(harmonic2 / (600 * kRate)));
+  EXPECT_GT(smallest_weight, 0.8);
+  EXPECT_LT(blended2, 4.0 * broadband2);
+}
+
 }  // namespace periodic_bias_compensation

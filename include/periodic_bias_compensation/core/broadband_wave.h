@@ -9,7 +9,9 @@
 //  - what the harmonic model misses is measured where bias wander is not: its residual
 //    acceleration above min_frequency (two first-order high-passes, only against a locked
 //    model), integrated by a second HeaveFilter, its variance less that of the white noise
-//    through both;
+//    through both; once that opens the share, the larger of it and what the difference of the
+//    two displacements says (its variance less the broadband error: a model locked elsewhere
+//    fits the acceleration yet gives the wrong displacement);
 //  - the broadband error is its own (the noise through the fixed filter, or the Wiener design's
 //    expected error) plus its output below the wave band (two first-order low-passes at half
 //    min_frequency), as averaged or as it is now, whichever is larger (bias wander grows faster
@@ -39,6 +41,7 @@ struct BroadbandWaveInput
   double raw = 0.0;          ///< level acceleration, gravity removed [m/s^2]
   double offset_free = 0.0;  ///< raw less the calibrated constant offset (fixed once calibrated)
   double residual = 0.0;     ///< what the harmonic model leaves of the acceleration [m/s^2]
+  double harmonic_position = 0.0;  ///< the harmonic model's wave displacement [m]
   bool locked = false;       ///< the harmonic model has a lock
   bool allowed = true;       ///< a horizontal axis may take a broadband share now
   bool turning = false;      ///< the ship turns: the sea as met changes, its spectrum is measured anew
@@ -98,6 +101,7 @@ private:
   std::array<HighPass, 2> residual_high_{};  ///< the harmonic model's residual above the band edge
   HeaveFilter residual_heave_;               ///< the residual's displacement
   double residual_band_variance_ = 0.0;
+  double difference_variance_ = 0.0;        ///< of harmonic less broadband displacement, since the lock
   double residual_samples_ = 0.0;            ///< in residual_band_variance_ since the lock
   double samples_ = 0.0;                     ///< in noise_variance_ and low_variance_
   double weight_ = 0.0;
