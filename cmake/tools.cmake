@@ -9,7 +9,7 @@ add_executable(evaluate_compensator src/tools/evaluate_compensator.cpp)
 target_link_libraries(evaluate_compensator ${PROJECT_NAME}_core ${PROJECT_NAME}_sim ${PROJECT_NAME}_tools
   ${catkin_LIBRARIES})
 
-# Speed benchmark of the core (Google Benchmark); run by scripts/bench, not a test.
+# Speed benchmark of the core (Google Benchmark); run by scripts/bench.py, not a test.
 find_package(benchmark QUIET)
 if(benchmark_FOUND)
   add_executable(core_benchmark EXCLUDE_FROM_ALL test/bench/core_benchmark.cpp)
@@ -17,7 +17,7 @@ if(benchmark_FOUND)
   target_compile_definitions(core_benchmark PRIVATE PBC_SCENARIO_DIR="${CMAKE_CURRENT_SOURCE_DIR}/config/scenarios")
 endif()
 
-# Speed of the ROS side (scripts/bench, not tests): the nodelet's input rate and latency, in the
+# Speed of the ROS side (scripts/bench.py, not tests): the nodelet's input rate and latency, in the
 # same manager as a publisher or as a separate process, and the floor of compensate_bag's speed.
 add_executable(nodelet_benchmark EXCLUDE_FROM_ALL test/bench/nodelet_benchmark.cpp)
 target_link_libraries(nodelet_benchmark ${PROJECT_NAME}_sim_ros ${catkin_LIBRARIES})

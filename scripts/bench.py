@@ -384,6 +384,11 @@ def main():
         p.add_argument('--json', default=JSON, help='results (default docs/bench/results.json)')
         p.add_argument('--out', default=OUT, help='markdown (default docs/benchmarks.md; plots in bench/ beside it)')
     args = parser.parse_args()
+    if not os.path.exists(args.json) and (args.command == 'render' or args.only) and \
+            os.path.abspath(args.out) == OUT:
+        # docs/benchmarks.md would be replaced by a file of "not measured" sections.
+        sys.exit('%s does not exist: measure every section first (scripts/bench.py run), or give --json '
+                 'and --out' % args.json)
     if args.command == 'render':
         render(load(args.json), args.out)
         return 0
