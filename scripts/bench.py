@@ -244,10 +244,12 @@ class Bench:
                 runs.append({'label': label, 'fields': fields(line.strip().split('\n')[-1])})
             messages = int(runs[-1]['fields']['messages'])
             rss = []  # the last repetition's is plotted
-            for label, extra, sample in (('compensate_bag', [], rss), ('compensate_bag_lz4', ['--compression', 'lz4'], None)):
-                wall = self.timed([self.exe('compensate_bag'), '--in', bag, '--out', out] + extra, sample)
+            for label, extra, sample in (('compensate_bag', [], rss),
+                                         ('compensate_bag_lz4', ['--compression', 'lz4'], None)):
+                wall = float('%.2f' % self.timed([self.exe('compensate_bag'), '--in', bag, '--out', out] + extra,
+                                                 sample))
                 runs.append({'label': label, 'fields': {'messages': str(messages), 'wall_s': '%.2f' % wall,
-                                                        'messages_per_s': '%g' % (messages / float('%.2f' % wall))}})
+                                                        'messages_per_s': '%g' % (messages / max(wall, 0.01))}})
         return {'seed': self.ros_seed, 'long_bag_s': self.long_bag_s, 'bag_size': size, 'reps': self.bag_reps,
                 'runs': runs, 'rss': rss, 'external': external}
 
