@@ -28,9 +28,9 @@ target_link_libraries(bag_read_floor ${catkin_LIBRARIES})
 if(CATKIN_ENABLE_TESTING)
   # The renderer of docs/benchmarks.md (test/bench/bench_render.py) on a small JSON fixture: a
   # Python unittest that writes its own JUnit XML (run by scripts/test like the gtests).
+  # run_tests.py takes each COMMAND argument as one shell command line, hence the one string.
   catkin_run_tests_target(pyunit test_bench_render pyunit-test_bench_render.xml
-    COMMAND /usr/bin/python3 ${CMAKE_CURRENT_SOURCE_DIR}/test/bench/test_bench_render.py
-            --xunit ${CATKIN_TEST_RESULTS_DIR}/${PROJECT_NAME}/pyunit-test_bench_render.xml)
+    COMMAND "/usr/bin/python3 ${CMAKE_CURRENT_SOURCE_DIR}/test/bench/test_bench_render.py --xunit ${CATKIN_TEST_RESULTS_DIR}/${PROJECT_NAME}/pyunit-test_bench_render.xml")
   # The tools' shared command line (parser, header only) and output files: the helper itself,
   # then each tool that writes files run as a program (same file as an input refused, a signal
   # or an unwritable directory leaves nothing behind and names the output).
