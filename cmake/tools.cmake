@@ -9,7 +9,7 @@ add_executable(evaluate_compensator src/tools/evaluate_compensator.cpp)
 target_link_libraries(evaluate_compensator ${PROJECT_NAME}_core ${PROJECT_NAME}_sim ${PROJECT_NAME}_tools
   ${catkin_LIBRARIES})
 
-# Speed benchmark of the core (Google Benchmark); run by scripts/bench, not a test.
+# Speed benchmark of the core (Google Benchmark); run by scripts/bench.py, not a test.
 find_package(benchmark QUIET)
 if(benchmark_FOUND)
   add_executable(core_benchmark EXCLUDE_FROM_ALL test/bench/core_benchmark.cpp)
@@ -17,7 +17,7 @@ if(benchmark_FOUND)
   target_compile_definitions(core_benchmark PRIVATE PBC_SCENARIO_DIR="${CMAKE_CURRENT_SOURCE_DIR}/config/scenarios")
 endif()
 
-# Speed of the ROS side (scripts/bench, not tests): the nodelet's input rate and latency, in the
+# Speed of the ROS side (scripts/bench.py, not tests): the nodelet's input rate and latency, in the
 # same manager as a publisher or as a separate process, and the floor of compensate_bag's speed.
 add_executable(nodelet_benchmark EXCLUDE_FROM_ALL test/bench/nodelet_benchmark.cpp)
 target_link_libraries(nodelet_benchmark ${PROJECT_NAME}_sim_ros ${catkin_LIBRARIES})
@@ -26,6 +26,11 @@ add_executable(bag_read_floor EXCLUDE_FROM_ALL test/bench/bag_read_floor.cpp)
 target_link_libraries(bag_read_floor ${catkin_LIBRARIES})
 
 if(CATKIN_ENABLE_TESTING)
+  # The renderer of docs/benchmarks.md (test/bench/bench_render.py) on a small JSON fixture: a
+  # Python unittest that writes its own JUnit XML (run by scripts/test like the gtests).
+  # run_tests.py takes each COMMAND argument as one shell command line, hence the one string.
+  catkin_run_tests_target(pyunit test_bench_render pyunit-test_bench_render.xml
+    COMMAND "/usr/bin/python3 ${CMAKE_CURRENT_SOURCE_DIR}/test/bench/test_bench_render.py --xunit ${CATKIN_TEST_RESULTS_DIR}/${PROJECT_NAME}/pyunit-test_bench_render.xml")
   # The tools' shared command line (parser, header only) and output files: the helper itself,
   # then each tool that writes files run as a program (same file as an input refused, a signal
   # or an unwritable directory leaves nothing behind and names the output).

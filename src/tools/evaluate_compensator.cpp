@@ -2,7 +2,7 @@
 // prints the drift of each method (no ROS, no bag): plain double integration, a causal high-pass
 // baseline in the style of x-io's oscillatory motion tracking, constant-bias compensation, the
 // paper's periodic compensation and the project's default mode. With --estimate it also scores
-// the odometry another estimator wrote to a bag for the same scenario and seed (scripts/bench).
+// the odometry another estimator wrote to a bag for the same scenario and seed (scripts/bench.py).
 //
 //   evaluate_compensator --scenario config/scenarios/paper_bench.yaml
 //       [--calibration-scenario config/scenarios/paper_static.yaml] [--seeds 5] [--settle 20]

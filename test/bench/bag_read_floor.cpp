@@ -2,7 +2,7 @@
 // reads the IMU messages (rosbag::View on the topic, each instantiated as sensor_msgs::Imu, as
 // compensate_bag does) and sums one field so the work cannot be dropped; with --whole-bag it also
 // reads every other message's bytes, as compensate_bag must (it copies ground_truth/* through).
-// Run by scripts/bench, not a test.
+// Run by scripts/bench.py, not a test.
 //
 //   bag_read_floor --in IN.bag [--imu-topic imu/data] [--whole-bag]
 //

@@ -1,23 +1,36 @@
-#!/usr/bin/env python3
-"""Tables and plots of scripts/bench's ROS-side measurements (markdown on stdout, png files).
+"""Tables and plots of scripts/bench.py's ROS-side measurements, from the data it keeps in
+docs/bench/results.json (markdown returned as a string, plots written as png files).
 
-  bench_report.py nodelet RUNS.txt PNG       nodelet_benchmark lines, each prefixed "label|"
-  bench_report.py bag RUNS.txt CORE.csv      bag_read_floor / compensate_bag lines, core medians
-  bench_report.py memory NODELET.csv BAG_RSS.txt PNG
+  nodelet_markdown(runs), nodelet_plot(runs, png)   runs: [{'label': ..., 'fields': {key: value}}]
+                                                      of nodelet_benchmark's result lines
+  bag_markdown(runs, core)                          bag_read_floor / compensate_bag runs (as above),
+                                                      core medians [{'name', 'real_time', 'items'}]
+  memory_markdown(rows, bag_rss), memory_plot(...)  the nodelet's RSS rows (its --rss-csv), and
+                                                      compensate_bag's [[wall s, RSS kB]]
 """
 import statistics
-import sys
 
 
 def fields(line):
+    """nodelet_benchmark's and bag_read_floor's "key=value ..." result line as a dict."""
     return dict(kv.split('=', 1) for kv in line.split())
 
 
-def nodelet(runs_path, png):
-    rows = []
-    for line in open(runs_path):
-        label, values = line.rstrip('\n').split('|', 1)
-        rows.append((label, fields(values)))
+def _nodelet_rows(runs):
+    rows = [(r['label'], r['fields']) for r in runs]
+    by = {(f['transport'], label): f for label, f in rows}
+    sustained_rows = {}  # by transport: the fastest paced run below the closed loop without a drop
+    for (t, label), f in by.items():
+        if '% of closed loop' in label and str(f['dropped']) == '0' and \
+                float(f['rate']) > float(sustained_rows.get(t, {'rate': 0})['rate']):
+            sustained_rows[t] = f
+    return rows, by, sustained_rows
+
+
+def nodelet_markdown(runs):
+    rows, by, sustained_rows = _nodelet_rows(runs)
+    out = []
+    print = lambda *a: out.append(a[0] if a else '')
     print('| transport | input | sent | dropped | input rate [msg/s] | latency p50 [us] | p99 [us] | max [us] |')
     print('|---|---|---|---|---|---|---|---|')
     for label, f in rows:
@@ -25,13 +38,7 @@ def nodelet(runs_path, png):
             f['transport'], label, f['sent'], f['dropped'], float(f['input_rate']),
             float(f['p50_us']), float(f['p99_us']), float(f['max_us'])))
     print()
-    by = {(f['transport'], label): f for label, f in rows}
     closed = {t: float(f['input_rate']) for (t, label), f in by.items() if label == 'closed loop'}
-    sustained_rows = {}  # by transport: the fastest paced run below the closed loop without a drop
-    for (t, label), f in by.items():
-        if '% of closed loop' in label and f['dropped'] == '0' and \
-                float(f['rate']) > float(sustained_rows.get(t, {'rate': 0})['rate']):
-            sustained_rows[t] = f
     sustained = {t: float(f['rate']) for t, f in sustained_rows.items()}
     for t in ('intra', 'tcp'):
         print('%s: closed loop %.0f msg/s; maximum sustained without drops: %s.' % (
@@ -49,6 +56,11 @@ def nodelet(runs_path, png):
             print('Latency p50 at %s, separate process / intra-process: %.0f / %.0f us = **%.1f**.'
                   % (label, float(b['p50_us']), float(a['p50_us']), float(b['p50_us']) / float(a['p50_us'])))
     print()
+    return '\n'.join(out)
+
+
+def nodelet_plot(runs, png):
+    _, by, sustained_rows = _nodelet_rows(runs)
     import matplotlib
     matplotlib.use('Agg')
     import matplotlib.pyplot as plt
@@ -74,11 +86,12 @@ def nodelet(runs_path, png):
     fig.savefig(png, dpi=110)
 
 
-def bag(runs_path, core_csv):
+def bag_markdown(bag_runs, core_rows):
+    out = []
+    print = lambda *a: out.append(a[0] if a else '')
     runs = {'floor': [], 'whole_bag': [], 'compensate_bag': [], 'compensate_bag_lz4': []}
-    for line in open(runs_path):
-        label, values = line.rstrip('\n').split('|', 1)
-        runs[label].append(fields(values))
+    for r in bag_runs:
+        runs[r['label']].append(r['fields'])
     messages = int(runs['floor'][0]['messages'])
     rate = {k: statistics.median(float(r['messages_per_s']) for r in v) for k, v in runs.items() if v}
     wall = {k: statistics.median(float(r['wall_s']) for r in v) for k, v in runs.items() if v}
@@ -97,12 +110,7 @@ def bag(runs_path, core_csv):
                                                     ('**%s**' if key.startswith('compensate_bag') else '%s') % ratio('whole_bag')))
     print()
     # The core against both floors: reading an in-memory array and reading the bag.
-    core = {}
-    for r in open(core_csv):
-        cells = r.split(',')
-        name = cells[0].strip('"').replace('_median', '')
-        if len(cells) > 6 and cells[6]:
-            core[name] = float(cells[6])
+    core = {r['name']: r['items'] for r in core_rows if r['items']}
     print('| core benchmark | samples per second | ns per sample | ratio to the in-memory floor | ratio to the bag floor |')
     print('|---|---|---|---|---|')
     for name, items in core.items():
@@ -125,16 +133,22 @@ def bag(runs_path, core_csv):
                          wall.get('whole_bag', float('nan')),
                          100 * wall.get('whole_bag', float('nan')) / wall['compensate_bag']))
         print()
+    return '\n'.join(out)
 
 
-def memory(nodelet_csv, bag_rss, png):
-    import csv
-    rows = list(csv.DictReader(open(nodelet_csv)))
+def _memory_series(rows):
     hours = [float(r['data_hours']) for r in rows]
     rss = [float(r['rss_kb']) / 1024 for r in rows]
     wall = [float(r['wall_s']) for r in rows]
     outputs = [int(r['outputs']) for r in rows]
     cost = [1e6 * (wall[i] - wall[i - 1]) / (outputs[i] - outputs[i - 1]) for i in range(1, len(rows))]
+    return hours, rss, cost
+
+
+def memory_markdown(rows, bag_rss):
+    out = []
+    print = lambda *a: out.append(a[0] if a else '')
+    hours, rss, cost = _memory_series(rows)
     print('| point | data time [h] | RSS [MB] | cost per message over the last block [us] |')
     print('|---|---|---|---|')
     for name, i in (('start', 1), ('middle', len(rows) // 2), ('end', len(rows) - 1)):
@@ -145,11 +159,19 @@ def memory(nodelet_csv, bag_rss, png):
           % (rss[0], rss[-1], rss[-1] - rss[0], max(rss), statistics.median(cost[:len(cost) // 10 or 1]),
              statistics.median(cost[-(len(cost) // 10 or 1):])))
     print()
-    bag_t, bag_rss_mb = [], []
-    for line in open(bag_rss):
-        t, kb = line.split()
-        bag_t.append(float(t))
-        bag_rss_mb.append(float(kb) / 1024)
+    bag_t = [float(t) for t, _ in bag_rss]
+    bag_rss_mb = [float(kb) / 1024 for _, kb in bag_rss]
+    if bag_rss_mb:
+        print('`compensate_bag` on the long bag: RSS %.1f MB after %.1f s, %.1f MB at the end (%.1f s).'
+              % (bag_rss_mb[0], bag_t[0], bag_rss_mb[-1], bag_t[-1]))
+        print()
+    return '\n'.join(out)
+
+
+def memory_plot(rows, bag_rss, png):
+    hours, rss, cost = _memory_series(rows)
+    bag_t = [float(t) for t, _ in bag_rss]
+    bag_rss_mb = [float(kb) / 1024 for _, kb in bag_rss]
     import matplotlib
     matplotlib.use('Agg')
     import matplotlib.pyplot as plt
@@ -174,11 +196,3 @@ def memory(nodelet_csv, bag_rss, png):
         ax.grid(alpha=0.3)
     fig.tight_layout()
     fig.savefig(png, dpi=110)
-    if bag_rss_mb:
-        print('`compensate_bag` on the long bag: RSS %.1f MB after %.1f s, %.1f MB at the end (%.1f s).'
-              % (bag_rss_mb[0], bag_t[0], bag_rss_mb[-1], bag_t[-1]))
-        print()
-
-
-if __name__ == '__main__':
-    {'nodelet': nodelet, 'bag': bag, 'memory': memory}[sys.argv[1]](*sys.argv[2:])

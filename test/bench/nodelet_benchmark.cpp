@@ -1,6 +1,6 @@
 // nodelet_benchmark: input rate, drops and latency of the compensator, in the same nodelet
 // manager as a publisher (intra-process, zero-copy shared pointers) or as a separate process
-// (compensator_node over TCP, started by the caller). Run by scripts/bench, not a test.
+// (compensator_node over TCP, started by the caller). Run by scripts/bench.py, not a test.
 //
 //   nodelet_benchmark --transport intra|tcp --scenario FILE.yaml --rate HZ --duration S
 //                     [--closed-loop] [--stream] [--rss-csv FILE] [--rss-every N]

@@ -1,6 +1,7 @@
 #!/usr/bin/python3
 """Renders the figures test_core's RealWorldStreams tests record (gtest XML, --gtest_output=xml)
-as the markdown section of docs/benchmarks.md that scripts/bench writes.
+as the table of docs/benchmarks.md's section "Real-world streams" (scripts/bench.py keeps them in
+docs/bench/results.json and renders them with markdown()).
 
   real_world_report.py RESULTS.xml
 """
@@ -27,8 +28,10 @@ def seeds(values, prefix):
             if k.startswith(prefix) and k[len(prefix):].isdigit()]
 
 
-def main():
-    tests = properties(sys.argv[1])
+def markdown(tests):
+    """The table of {test name: {property: value}}, as a string."""
+    out = []
+    print = out.append
     rest = tests['SensorAtRestInventsNoMotion']
     bench = tests['SlowPeriodicBiasIsBiasNotMotion']
     jitter = tests['StampJitterChangesNothing']
@@ -66,6 +69,11 @@ def main():
               % (label, real[name + '_gyro_attitude_max_wave'], real[name + '_gyro_attitude_max_filtered']))
         print('| %s, one level frame | max \\|wave\\|, filtered excursion [m] | <= 0.02 | %.3f, %.3f |'
               % (label, real[name + '_one_frame_max_wave'], real[name + '_one_frame_max_filtered']))
+    return '\n'.join(out)
+
+
+def main():
+    print(markdown(properties(sys.argv[1])))
 
 
 if __name__ == '__main__':

@@ -470,7 +470,7 @@ TEST(Reliability, LongRunMemoryAndCostFlatOutputsBounded)
     EXPECT_LT(table.back().rss_mb - table.front().rss_mb, 2.0) << "memory grows";
   }
   // The cost per sample is printed above but not asserted: wall time depends on the machine's load
-  // (a timed test is flaky); its flatness over 24 h is measured by scripts/bench (docs/benchmarks.md).
+  // (a timed test is flaky); its flatness over 24 h is measured by scripts/bench.py (docs/benchmarks.md).
   // Outputs bounded and the wave estimate does not degrade with time (precision of phase and
   // period tables at Unix-time stamps).
   const double first_error = std::sqrt(table.front().wave_error2 / table.front().wave_truth2);

@@ -1,12 +1,12 @@
 #!/usr/bin/python3
-"""External baselines for scripts/bench: robot_localization's EKF fed the IMU alone, and
+"""External baselines for scripts/bench.py: robot_localization's EKF fed the IMU alone, and
 imu_tools' Madgwick attitude feeding our compensator's gravity removal. Their code is not in this
 repository: give the devel (or install) folders of built copies; without them this prints why
 nothing was measured and exits 0.
 
-  scripts/bench_external accuracy --bin BIN --scenarios A.yaml B.yaml --seeds N --work DIR
-                                  [--robot-localization DEVEL] [--imu-tools DEVEL]
-  scripts/bench_external throughput --bag BAG --robot-localization DEVEL [--seconds S]
+  scripts/bench_external.py accuracy --bin BIN --scenarios A.yaml B.yaml --seeds N --work DIR
+                                     [--robot-localization DEVEL] [--imu-tools DEVEL]
+  scripts/bench_external.py throughput --bag BAG --robot-localization DEVEL [--seconds S]
 
 accuracy: per scenario and seed, simulate_imu writes the bag; this script publishes its IMU
 messages, stamps kept, into ekf_localization_node (config/bench/ekf_imu_only.yaml) and
@@ -267,7 +267,7 @@ def accuracy(args):
     madgwick = built(args.imu_tools, MADGWICK_NODE, "imu_tools' imu_filter_node")
     if not ekf and not madgwick:
         print('robot_localization and imu_tools were not measured in this run: no built copy was given '
-              '(`scripts/bench --robot-localization DEVEL --imu-tools DEVEL`).')
+              '(`scripts/bench.py run --robot-localization DEVEL --imu-tools DEVEL`).')
         return
     for path, devel, package in ((ekf, args.robot_localization, 'robot_localization'),
                                  (madgwick, args.imu_tools, 'imu_filter_madgwick')):

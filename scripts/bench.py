@@ -1,0 +1,401 @@
+#!/usr/bin/python3
+"""Benchmarks: accuracy on the simulator's shipped scenarios (truth known) and speed of the core
+and of the ROS side. Measurements go to docs/bench/results.json; docs/benchmarks.md is rendered
+from it with the template docs/bench/benchmarks.md.in. Ratios are measured in the same run;
+absolute times depend on the machine (recorded in the output).
+
+  scripts/bench.py run [--quick] [--only SECTION,...] [--robot-localization DEVEL] [--imu-tools DEVEL]
+                       [--json PATH] [--out PATH]
+  scripts/bench.py render [--json PATH] [--out PATH]
+
+run: builds the benchmark programs (scripts/setup), measures (progress on stderr), writes the JSON
+  and renders. --only measures the given sections alone and keeps the JSON's other sections.
+  --quick: 3 seeds instead of 10, short scenarios, short ROS runs.
+  --robot-localization, --imu-tools (or $PBC_ROBOT_LOCALIZATION, $PBC_IMU_TOOLS): devel folders of
+  built copies of those packages (not in this repository; skipped with a message without);
+  $PBC_BENCH_EXTERNAL_SEEDS: seeds of the external accuracy runs (1).
+render: the JSON to markdown only (plots beside the output, in bench/).
+--out: the markdown (default docs/benchmarks.md; its plots go to bench/ beside it). The sections
+  from "## Reliability runs" on are kept by hand and carried over from docs/benchmarks.md.
+Sections: core-speed, nodelet, bag, memory, accuracy, external-accuracy, real-recordings,
+  real-world, simulator-speed.
+"""
+import argparse
+import csv
+import datetime
+import io
+import json
+import os
+import random
+import re
+import shutil
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+
+REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+sys.path.insert(0, os.path.join(REPO, 'test', 'bench'))
+import bench_render  # noqa: E402
+import real_world_report  # noqa: E402
+from bench_report import fields  # noqa: E402
+from bench_tables import parse_blocks  # noqa: E402
+
+JSON = os.path.join(REPO, 'docs', 'bench', 'results.json')
+OUT = os.path.join(REPO, 'docs', 'benchmarks.md')
+TEMPLATE = os.path.join(REPO, 'docs', 'bench', 'benchmarks.md.in')
+TARGETS = ('core_benchmark', 'evaluate_compensator', 'nodelet_benchmark', 'bag_read_floor', 'simulate_imu',
+           'compensate_bag', 'test_core')
+PY = '/usr/bin/python3'  # Debian's ROS modules live there, not in another python on PATH
+
+
+def log(message):
+    print('[bench] ' + message, file=sys.stderr, flush=True)
+
+
+def load(path):
+    if os.path.exists(path):
+        with open(path) as f:
+            return json.load(f)
+    return {'sections': {}}
+
+
+def render(results, out):
+    with open(TEMPLATE) as f:
+        template = f.read()
+    results = dict(results)
+    with open(OUT) as f:  # the hand-kept sections, from the committed file
+        results['kept'] = bench_render.kept_section(f.read())
+    text = bench_render.render(results, template, os.path.join(os.path.dirname(os.path.abspath(out)), 'bench'))
+    with open(out, 'w') as f:
+        f.write(text)
+    return text
+
+
+class Bench:
+    """One run: the workspace's programs, a temporary folder, the settings of --quick."""
+
+    def __init__(self, args):
+        self.args = args
+        self.quick = args.quick
+        self.tmp = tempfile.mkdtemp(prefix='pbc_bench_')
+        self.master = None
+        self.seeds = 3 if self.quick else 10
+        self.scenarios = (['paper_bench', 'moored_sea_state_4'] if self.quick else
+                          ['paper_bench', 'moored_sea_state_4', 'swell_and_wind_sea', 'underway_course_changes'])
+        self.sea_duration = 600 if self.quick else 1800  # [s]: slow-motion errors at 60 s, 10 min, 30 min
+        # Rates and lengths of the ROS side.
+        self.paced_s = [10, 5, 5] if self.quick else [30, 20, 10]
+        self.max_data_s = 30 if self.quick else 600
+        self.long_bag_s = 600 if self.quick else 3600
+        self.memory_s = 7200 if self.quick else 86400
+        self.bag_reps = 1 if self.quick else 3
+        self.ros_scenario = os.path.join(REPO, 'config/scenarios/swell_and_wind_sea.yaml')  # 100 Hz, two seas
+        with open(self.ros_scenario) as f:  # the scenario's own seed
+            self.ros_seed = int(re.search(r'^seed: *(\d+)', f.read(), re.M).group(1))
+        self.env = self.setup()
+        self.bin = os.path.join(self.ws, 'devel/lib/periodic_bias_compensation')
+        self.bag = None
+
+    def setup(self):
+        """scripts/setup (install, build), the benchmark targets, and devel/setup.bash's environment."""
+        script = ('source "%s/scripts/setup" >&2 && cd "$PBC_WS" && '
+                  '{ catkin_make -j2 %s > "$PBC_WS/bench_build.log" 2>&1 || '
+                  '{ tail -n 40 "$PBC_WS/bench_build.log" >&2; exit 1; }; } && '
+                  'set +u && source devel/setup.bash && env -0' % (REPO, ' '.join(TARGETS)))
+        r = subprocess.run(['bash', '-c', script], stdout=subprocess.PIPE,
+                           env=dict(os.environ, PATH='/usr/sbin:/usr/bin:/sbin:/bin'))
+        if r.returncode:
+            sys.exit(1)
+        env = dict(kv.split('=', 1) for kv in r.stdout.decode().split('\0') if '=' in kv)
+        self.ws = env['PBC_WS']
+        return env
+
+    def exe(self, name):
+        return os.path.join(self.bin, name)
+
+    def close(self):
+        if self.master:
+            self.master.send_signal(signal.SIGINT)
+            try:
+                self.master.wait(20)
+            except subprocess.TimeoutExpired:
+                self.master.kill()
+        shutil.rmtree(self.tmp, ignore_errors=True)
+
+    def start_master(self):
+        if self.master:
+            return
+        port = 11500 + random.randrange(400)
+        self.env.update(ROS_HOME=os.path.join(self.tmp, 'ros'), ROS_MASTER_URI='http://127.0.0.1:%d' % port)
+        with open(os.path.join(self.tmp, 'master.log'), 'w') as f:
+            self.master = subprocess.Popen(['rosmaster', '--core', '-p', str(port)], env=self.env, stdout=f,
+                                           stderr=subprocess.STDOUT)
+        time.sleep(2)
+
+    def output(self, cmd, **kw):
+        return subprocess.run(cmd, env=self.env, stdout=subprocess.PIPE, universal_newlines=True, **kw)
+
+    # --- sections: each returns its JSON ---
+
+    def core_speed(self):
+        log('core speed (Google Benchmark, 5 repetitions, medians)')
+        r = self.output([self.exe('core_benchmark'), '--benchmark_repetitions=5',
+                         '--benchmark_report_aggregates_only=true', '--benchmark_format=csv'],
+                        stderr=subprocess.DEVNULL)
+        rows = []
+        for cells in csv.reader(io.StringIO(r.stdout)):
+            if cells and cells[0].endswith('_median'):
+                rows.append({'name': cells[0].replace('_median', ''), 'real_time': float(cells[2]),
+                             'items': float(cells[6]) if len(cells) > 6 and cells[6] else 0.0})
+        return {'repetitions': 5, 'rows': rows}
+
+    def nodelet_run(self, label, transport, *extra):
+        """One nodelet_benchmark run: {'label', 'fields'}; tcp starts compensator_node first."""
+        node = None
+        with open(os.path.join(self.tmp, 'node.log'), 'a') as node_log:
+            if transport == 'tcp':
+                node = subprocess.Popen([self.exe('compensator_node'), '__name:=compensator'], env=self.env,
+                                        stdout=node_log, stderr=subprocess.STDOUT)
+            r = self.output([self.exe('nodelet_benchmark'), '--transport', transport, '--scenario',
+                             self.ros_scenario] + [str(x) for x in extra], stderr=subprocess.STDOUT)
+            with open(os.path.join(self.tmp, 'nodelet.log'), 'a') as f:  # ROS's log lines, also on stdout
+                f.write(r.stdout)
+            lines = [line for line in r.stdout.split('\n') if line.startswith('transport=')]
+            if node:
+                node.send_signal(signal.SIGINT)
+                node.wait()
+        if r.returncode or not lines:
+            sys.stderr.write('\n'.join(r.stdout.split('\n')[-20:]) + '\n')
+            raise RuntimeError('nodelet_benchmark failed (%s, %s)' % (label, transport))
+        return {'label': label, 'fields': fields(lines[-1])}
+
+    def nodelet(self):
+        self.start_master()
+        runs = []
+        for transport in ('intra', 'tcp'):
+            log('nodelet (%s): 100 Hz, 1 kHz, maximum' % transport)
+            runs.append(self.nodelet_run('100 Hz', transport, '--rate', 100, '--duration', self.paced_s[0]))
+            runs.append(self.nodelet_run('1 kHz', transport, '--rate', 1000, '--duration', self.paced_s[1]))
+            closed = self.nodelet_run('closed loop', transport, '--rate', 1000, '--duration', self.max_data_s,
+                                      '--closed-loop')
+            runs.append(closed)
+            # Paced at 75, 50, 25 % of the closed-loop rate: the first with no message dropped is the
+            # sustained maximum (to 25 % of the closed-loop rate).
+            for percent in (75, 50, 25):
+                rate = int(float(closed['fields']['input_rate']) * percent / 100)
+                run = self.nodelet_run('%d %% of closed loop, %d Hz' % (percent, rate), transport, '--rate', rate,
+                                       '--duration', self.paced_s[2])
+                runs.append(run)
+                if run['fields']['dropped'] == '0':
+                    break
+        return {'seed': self.ros_seed, 'paced_s': self.paced_s, 'max_data_s': self.max_data_s, 'runs': runs}
+
+    def long_bag(self):
+        """The long bag every program of the bag section reads (simulated once per run)."""
+        if not self.bag:
+            self.bag = os.path.join(self.tmp, 'long.bag')
+            with open(os.path.join(self.tmp, 'sim.log'), 'w') as f:
+                subprocess.run([self.exe('simulate_imu'), '--scenario', self.ros_scenario, '--duration',
+                                str(self.long_bag_s), '--out', self.bag], env=self.env, stdout=f,
+                               stderr=subprocess.STDOUT, check=True)
+        return self.bag
+
+    def timed(self, cmd, rss=None):
+        """Wall time of CMD [s]; with RSS (a list), its RSS every 0.5 s as [s, kB]."""
+        log_path = os.path.join(self.tmp, 'compensate.log')
+        start = time.time()
+        with open(log_path, 'w') as f:
+            p = subprocess.Popen(cmd, env=self.env, stdout=f, stderr=subprocess.STDOUT)
+            while p.poll() is None:
+                if rss is not None:
+                    try:
+                        with open('/proc/%d/status' % p.pid) as status:
+                            kb = re.search(r'^VmRSS:\s*(\d+)', status.read(), re.M)
+                        if kb:
+                            rss.append([round(time.time() - start, 2), int(kb.group(1))])
+                    except OSError:
+                        pass
+                    time.sleep(0.5)
+                else:
+                    time.sleep(0.01)
+        wall = time.time() - start
+        if p.returncode:
+            with open(log_path) as f:
+                sys.stderr.write(f.read())
+            raise RuntimeError('%s failed' % cmd[0])
+        return wall
+
+    def bag_section(self):
+        log('compensate_bag against a read-only loop on a %d s, 100 Hz bag' % self.long_bag_s)
+        bag = self.long_bag()
+        size = self.output(['du', '-h', bag]).stdout.split()[0]
+        # The long bag every program of this section reads (external nodes on it: add them here).
+        log("robot_localization's node on the same bag")
+        r = self.output([PY, os.path.join(REPO, 'scripts/bench_external.py'), 'throughput', '--bag', bag,
+                         '--robot-localization', self.args.robot_localization or ''])
+        external = {'blocks': parse_blocks(r.stdout.strip('\n')) if r.returncode == 0 and r.stdout.strip() else []}
+        runs, rss = [], []
+        out = os.path.join(self.tmp, 'out.bag')
+        for _ in range(self.bag_reps):
+            for label, extra in (('floor', []), ('whole_bag', ['--whole-bag'])):
+                line = self.output([self.exe('bag_read_floor'), '--in', bag] + extra, check=True).stdout
+                runs.append({'label': label, 'fields': fields(line.strip().split('\n')[-1])})
+            messages = int(runs[-1]['fields']['messages'])
+            rss = []  # the last repetition's is plotted
+            for label, extra, sample in (('compensate_bag', [], rss),
+                                         ('compensate_bag_lz4', ['--compression', 'lz4'], None)):
+                wall = float('%.2f' % self.timed([self.exe('compensate_bag'), '--in', bag, '--out', out] + extra,
+                                                 sample))
+                runs.append({'label': label, 'fields': {'messages': str(messages), 'wall_s': '%.2f' % wall,
+                                                        'messages_per_s': '%g' % (messages / max(wall, 0.01))}})
+        return {'seed': self.ros_seed, 'long_bag_s': self.long_bag_s, 'bag_size': size, 'reps': self.bag_reps,
+                'runs': runs, 'rss': rss, 'external': external}
+
+    def memory(self):
+        self.start_master()
+        log('memory: the nodelet fed %d s of 100 Hz data at full speed' % self.memory_s)
+        rss_csv = os.path.join(self.tmp, 'rss.csv')
+        run = self.nodelet_run('memory', 'intra', '--rate', 100, '--duration', self.memory_s, '--closed-loop',
+                               '--stream', '--rss-csv', rss_csv, '--rss-every', 6000)
+        with open(rss_csv) as f:
+            rows = list(csv.DictReader(f))
+        return {'seed': self.ros_seed, 'memory_s': self.memory_s, 'result': run, 'rows': rows}
+
+    def accuracy(self):
+        scenarios = []
+        for sc in self.scenarios:
+            log('accuracy: ' + sc)
+            duration = [] if sc == 'paper_bench' else ['--duration', str(self.sea_duration)]
+            r = self.output([self.exe('evaluate_compensator'), '--scenario',
+                             os.path.join(REPO, 'config/scenarios/%s.yaml' % sc), '--seeds', str(self.seeds)]
+                            + duration, stderr=subprocess.DEVNULL, check=True)
+            scenarios.append({'name': sc, 'blocks': parse_blocks(r.stdout.rstrip('\n'))})
+        return {'seeds': self.seeds, 'sea_duration': self.sea_duration, 'scenarios': scenarios}
+
+    def external(self, command, *extra):
+        """scripts/bench_external.py's markdown, and whether it failed."""
+        r = self.output([PY, os.path.join(REPO, 'scripts/bench_external.py'), command, '--bin', self.bin,
+                         '--robot-localization', self.args.robot_localization or '',
+                         '--imu-tools', self.args.imu_tools or ''] + list(extra))
+        return r.stdout, r.returncode != 0
+
+    def external_accuracy(self):
+        # ~600-900 IMU messages per second through ROS (one at a time): one seed of the four scenarios
+        # takes ~7 min; more with PBC_BENCH_EXTERNAL_SEEDS.
+        seeds = os.environ.get('PBC_BENCH_EXTERNAL_SEEDS', '1')
+        log('accuracy: robot_localization and imu_tools')
+        text, failed = self.external('accuracy', '--seeds', seeds, '--work', os.path.join(self.tmp, 'external'),
+                                     '--scenarios', *[os.path.join(REPO, 'config/scenarios/%s.yaml' % sc)
+                                                      for sc in self.scenarios])
+        parts = re.split(r'^### (\S+)\n', text, flags=re.M)
+        return {'seeds': int(seeds), 'preamble': parts[0].strip('\n').split('\n'), 'failed': failed,
+                'scenarios': [{'name': n, 'blocks': parse_blocks(b.strip('\n'))}
+                              for n, b in zip(parts[1::2], parts[2::2])]}
+
+    def real_recordings(self):
+        log('accuracy: real recordings')
+        text, failed = self.external('real', '--work', os.path.join(self.tmp, 'real'))
+        return {'blocks': parse_blocks(text.strip('\n')), 'failed': failed}
+
+    def real_world(self):
+        # Streams as real IMUs deliver them, made by generators of their own (not the simulator's), and
+        # the real recordings at rest: test_core's RealWorldStreams tests record their figures.
+        log('real-world streams (test_core RealWorldStreams*)')
+        xml = os.path.join(self.tmp, 'real_world.xml')
+        r = self.output([self.exe('test_core'), '--gtest_filter=RealWorldStreams*', '--gtest_output=xml:' + xml],
+                        stderr=subprocess.STDOUT)
+        failed = len(re.findall(r'FAILED  \]', r.stdout)) if r.returncode else 0
+        return {'tests': real_world_report.properties(xml), 'failed_lines': failed}
+
+    def simulator_speed(self):
+        log('simulator: 24 h of underway_course_changes')
+        duration = 86400
+        r = subprocess.run(['/usr/bin/time', '-f', '%e %M', self.exe('simulate_imu'), '--scenario',
+                            os.path.join(REPO, 'config/scenarios/underway_course_changes.yaml'), '--duration',
+                            str(duration)], env=self.env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                           universal_newlines=True, check=True)
+        wall, kb = r.stderr.strip().split('\n')[-1].split()
+        return {'duration': duration, 'wall_s': float(wall), 'max_rss_kb': int(kb)}
+
+
+def machine():
+    model = re.search(r'^Model name:\s*(.*)$', subprocess.run(['lscpu'], stdout=subprocess.PIPE,
+                                                                universal_newlines=True).stdout, re.M)
+    return model.group(1).strip() if model else 'unknown CPU', os.cpu_count()
+
+
+def loadavg():
+    with open('/proc/loadavg') as f:
+        return ' '.join(f.read().split()[:3])
+
+
+def run(args):
+    only = args.only.split(',') if args.only else list(bench_render.SECTIONS)
+    unknown = [s for s in only if s not in bench_render.SECTIONS]
+    if unknown:
+        sys.exit('unknown section(s): %s (sections: %s)' % (', '.join(unknown), ', '.join(bench_render.SECTIONS)))
+    results = load(args.json)
+    commit = subprocess.run(['git', '-C', REPO, 'rev-parse', '--short', 'HEAD'], stdout=subprocess.PIPE,
+                            universal_newlines=True).stdout.strip()
+    model, cores = machine()
+    now = datetime.datetime.now(datetime.timezone.utc)
+    run_info = {'id': now.strftime('%Y%m%dT%H%M%SZ'), 'date': now.strftime('%Y-%m-%d'), 'commit': commit,
+                'quick': args.quick, 'machine': model, 'cores': cores, 'load_start': loadavg(),
+                'sections': [s for s in bench_render.SECTIONS if s in only]}
+    bench = Bench(args)
+    methods = {'core-speed': bench.core_speed, 'nodelet': bench.nodelet, 'bag': bench.bag_section,
+               'memory': bench.memory, 'accuracy': bench.accuracy, 'external-accuracy': bench.external_accuracy,
+               'real-recordings': bench.real_recordings, 'real-world': bench.real_world,
+               'simulator-speed': bench.simulator_speed}
+    try:
+        for name in bench_render.SECTIONS:  # the order of measurement
+            if name in only:
+                section = methods[name]()
+                section['run'] = {k: run_info[k] for k in ('id', 'date', 'commit', 'quick')}
+                results.setdefault('sections', {})[name] = section
+    except (RuntimeError, subprocess.CalledProcessError) as e:
+        log('error: %s' % e)
+        return 1
+    finally:
+        bench.close()
+    run_info['load_end'] = loadavg()
+    results['run'] = run_info
+    os.makedirs(os.path.dirname(os.path.abspath(args.json)), exist_ok=True)
+    with open(args.json, 'w') as f:
+        json.dump(results, f, indent=1, sort_keys=False)
+        f.write('\n')
+    log('results: %s' % args.json)
+    render(results, args.out)
+    log('rendered: %s' % args.out)
+    return 0
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    sub = parser.add_subparsers(dest='command', required=True)
+    r = sub.add_parser('run', help='measure, write the JSON, render')
+    r.add_argument('--quick', action='store_true', help='3 seeds instead of 10, short scenarios, short ROS runs')
+    r.add_argument('--only', help='comma-separated sections to measure (the others are kept from the JSON): '
+                   + ', '.join(bench_render.SECTIONS))
+    r.add_argument('--robot-localization', default=os.environ.get('PBC_ROBOT_LOCALIZATION', ''))
+    r.add_argument('--imu-tools', default=os.environ.get('PBC_IMU_TOOLS', ''))
+    d = sub.add_parser('render', help='the JSON to markdown only')
+    for p in (r, d):
+        p.add_argument('--json', default=JSON, help='results (default docs/bench/results.json)')
+        p.add_argument('--out', default=OUT, help='markdown (default docs/benchmarks.md; plots in bench/ beside it)')
+    args = parser.parse_args()
+    if not os.path.exists(args.json) and (args.command == 'render' or args.only) and \
+            os.path.abspath(args.out) == OUT:
+        # docs/benchmarks.md would be replaced by a file of "not measured" sections.
+        sys.exit('%s does not exist: measure every section first (scripts/bench.py run), or give --json '
+                 'and --out' % args.json)
+    if args.command == 'render':
+        render(load(args.json), args.out)
+        return 0
+    return run(args)
+
+
+if __name__ == '__main__':
+    sys.exit(main())

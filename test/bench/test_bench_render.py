@@ -1,0 +1,170 @@
+#!/usr/bin/python3
+"""The renderer of docs/benchmarks.md (test/bench/bench_render.py) on a small JSON fixture: every
+figure of the fixture reaches the markdown, the prose's figures are computed from it, no
+placeholder is left, and a section absent from the JSON reads "not measured".
+
+  test_bench_render.py [--xunit RESULTS.xml]    (the catkin test writes JUnit XML)
+"""
+import copy
+import json
+import os
+import re
+import sys
+import time
+import unittest
+import xml.etree.ElementTree as ET
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+REPO = os.path.dirname(os.path.dirname(HERE))
+sys.path.insert(0, HERE)
+import bench_render  # noqa: E402
+from bench_tables import table_lines  # noqa: E402
+
+with open(os.path.join(HERE, 'fixtures', 'results_small.json')) as f:
+    FIXTURE = json.load(f)
+with open(os.path.join(REPO, 'docs', 'bench', 'benchmarks.md.in')) as f:
+    TEMPLATE = f.read()
+KEPT = '## Reliability runs\n\nKept by hand: 12.5 s.\n\n## Measurements behind the design\n\nAlso kept.'
+
+
+def render(results):
+    results = copy.deepcopy(results)
+    results['kept'] = KEPT
+    return bench_render.render(results, TEMPLATE)  # no plots: fast, no matplotlib
+
+
+class RenderTest(unittest.TestCase):
+    def assertIn(self, part, whole, msg=None):  # a short message: the rendered file is long
+        if part not in whole:
+            self.fail(msg or '%r not in the rendered markdown' % part)
+
+    def setUp(self):
+        self.md = render(FIXTURE)
+        self.sections = FIXTURE['sections']
+
+    def test_no_placeholder_left(self):
+        for pattern in (r'\$\{', r'\{\{', r'\$[A-Za-z_]', '<!--'):
+            self.assertIsNone(re.search(pattern, self.md), pattern)
+
+    def test_every_section_rendered(self):
+        self.assertNotIn('Not measured yet', self.md)
+        for heading in ('## Accuracy on simulated scenarios', '## Accuracy against robot_localization',
+                        '## Accuracy on real recordings', '### Where the baselines win or lose',
+                        '## Real-world streams', '## Speed of the core', '## Speed of the simulator',
+                        '## Speed of the nodelet', '## compensate_bag against a read-only loop',
+                        '## Memory over a long run'):
+            self.assertIn('\n' + heading, self.md)
+        self.assertTrue(self.md.rstrip('\n').endswith(KEPT), 'the hand-kept sections close the file')
+
+    def test_header_figures(self):
+        run = FIXTURE['run']
+        for key in ('machine', 'date', 'commit', 'load_start', 'load_end'):
+            self.assertIn(str(run[key]), self.md)
+        self.assertIn('%d cores' % run['cores'], self.md)
+
+    def test_accuracy_tables_verbatim(self):
+        for name in ('accuracy', 'external-accuracy'):
+            for scenario in self.sections[name]['scenarios']:
+                self.assertIn('### %s\n' % scenario['name'], self.md)
+                for block in scenario['blocks']:
+                    if 'table' in block:
+                        for line in table_lines(block['table']['header'], block['table']['rows']):
+                            self.assertIn(line, self.md)
+                    else:
+                        for line in block['text']:
+                            self.assertIn(line, self.md)
+        self.assertIn('medians over seeds 1..%d;' % self.sections['accuracy']['seeds'], self.md)
+        self.assertIn('%d s (`--duration`' % self.sections['accuracy']['sea_duration'], self.md)
+        for block in self.sections['real-recordings']['blocks']:
+            for row in block.get('table', {}).get('rows', []):
+                self.assertIn('| ' + ' | '.join(row) + ' |', self.md)
+
+    def test_ros_side_figures(self):
+        nodelet = self.sections['nodelet']
+        for run in nodelet['runs']:
+            f = run['fields']
+            self.assertIn('| %s | %s | %s | %s | %s | %s | %s | %s |' % (
+                f['transport'], run['label'], f['sent'], f['dropped'], f['input_rate'], f['p50_us'], f['p99_us'],
+                f['max_us']), self.md)
+        self.assertIn('Paced runs last %d s (100 Hz),\n%d s (1 kHz) and %d s' % tuple(nodelet['paced_s']), self.md)
+        self.assertIn('maximum sustained without drops: 26669 msg/s', self.md)
+        self.assertIn('Closed-loop rate, intra-process / separate process: **5.85**', self.md)
+        bag = self.sections['bag']
+        self.assertIn('A %d s bag of `swell_and_wind_sea` (seed %d)' % (bag['long_bag_s'], bag['seed']), self.md)
+        self.assertIn('(%s, IMU and' % bag['bag_size'], self.md)
+        for run in bag['runs']:
+            self.assertIn('| %s | %s |' % (run['fields']['messages'], run['fields']['wall_s']), self.md)
+        self.assertIn("robot_localization's node: not measured", self.md)
+        memory = self.sections['memory']
+        self.assertIn('fed %d h of' % (memory['memory_s'] // 3600), self.md)
+        self.assertIn('(%d messages' % (memory['memory_s'] * 100), self.md)
+        self.assertIn('RSS 1.8 MB after 0.1 s, 112.6 MB at the end (95.2 s)', self.md)
+        self.assertIn('| start | 0.03 | 34.6 | 55.0 |', self.md)
+
+    def test_core_simulator_real_world(self):
+        for row in self.sections['core-speed']['rows']:
+            self.assertIn('| %s | %.1f | %.3g |' % (row['name'], row['real_time'], row['items']), self.md)
+        self.assertIn('| compensate/paper_bench_default | 42923.7 | 8.41e+05 | 396.4 | 863 |', self.md)
+        sim = self.sections['simulator-speed']
+        self.assertIn('%.2f s wall, %d kB max RSS' % (sim['wall_s'], sim['max_rss_kb']), self.md)
+        self.assertIn('Measured 2026-11-23 at commit def5678, `--quick`', self.md)  # another run's section
+        self.assertIn('| 0.63 (exact 0.64) |', self.md)
+        self.assertIn('| 17.1 (84.8) |', self.md)
+        self.assertIn('random walk (2 seeds)', self.md)
+        self.assertIn('300 components; 1 seed)', self.md)
+
+    def test_prose_is_computed(self):
+        prose = self.md.split('### Where the baselines win or lose')[1].split('\n## ')[0]
+        # Heave: z % of Hs, harmonic heave -> default, from the moored ship's table.
+        self.assertIn('`moored_sea_state_4` 17 -> 3.8 % of Hs (x 0.22)', prose)
+        # Real recordings: Madgwick + default against default on the buoy.
+        self.assertIn('buoy_morro_bay 0.43 against 0.72 m (better)', prose)
+        self.assertIn('(the ship goes 7200 m from its start)', prose)
+        # A changed table changes the wording: Madgwick made worse than default on the buoy.
+        changed = copy.deepcopy(FIXTURE)
+        for block in changed['sections']['real-recordings']['blocks']:
+            for row in block.get('table', {}).get('rows', []):
+                if row[0] == 'buoy_morro_bay' and row[2] == 'Madgwick + default':
+                    row[3] = '2.500'
+        self.assertIn('buoy_morro_bay 2.5 against 0.72 m (worse)', render(changed))
+
+    def test_absent_section(self):
+        results = copy.deepcopy(FIXTURE)
+        del results['sections']['nodelet']
+        del results['sections']['external-accuracy']
+        md = render(results)
+        self.assertIn('## Speed of the nodelet\n\nNot measured yet: `scripts/bench.py run --only nodelet`.', md)
+        self.assertIn('--only external-accuracy', md)
+        self.assertNotIn('robot_localization\'s EKF, IMU alone', md)  # its point needs that table
+        self.assertIsNone(re.search(r'\$\{', md))
+
+    def test_kept_section(self):
+        text = '# Benchmarks\n\nmeasured\n\n' + KEPT + '\n'
+        self.assertEqual(bench_render.kept_section(text), KEPT)
+        self.assertEqual(bench_render.kept_section('# Benchmarks\n'), '')
+
+
+def xunit(result, tests, seconds, path):
+    """JUnit XML for catkin_test_results."""
+    suite = ET.Element('testsuite', name='test_bench_render', tests=str(tests), errors=str(len(result.errors)),
+                       failures=str(len(result.failures)), skipped='0', time='%.3f' % seconds)
+    bad = {t.id(): ('error', m) for t, m in result.errors}
+    bad.update({t.id(): ('failure', m) for t, m in result.failures})
+    for test in unittest.defaultTestLoader.loadTestsFromTestCase(RenderTest):
+        case = ET.SubElement(suite, 'testcase', classname='RenderTest', name=test.id().rsplit('.', 1)[1],
+                             time='0')
+        if test.id() in bad:
+            kind, message = bad[test.id()]
+            ET.SubElement(case, kind, message=message.strip().split('\n')[-1]).text = message
+    ET.ElementTree(suite).write(path, encoding='utf-8', xml_declaration=True)
+
+
+if __name__ == '__main__':
+    path = sys.argv[sys.argv.index('--xunit') + 1] if '--xunit' in sys.argv else None
+    suite = unittest.defaultTestLoader.loadTestsFromTestCase(RenderTest)
+    start = time.time()
+    result = unittest.TextTestRunner(verbosity=2).run(suite)
+    if path:
+        os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
+        xunit(result, suite.countTestCases(), time.time() - start, path)
+    sys.exit(0 if result.wasSuccessful() else 1)
