@@ -2,6 +2,7 @@
 #include "periodic_bias_compensation/core/broadband_wave.h"
 #include "periodic_bias_compensation/core/harmonic_model.h"
 #include "periodic_bias_compensation/core/leveller.h"
+#include "periodic_bias_compensation/core/lever_arm.h"
 #include "periodic_bias_compensation/core/paper_loop.h"
 #include "periodic_bias_compensation/core/parameter_table.h"
 
@@ -179,7 +180,7 @@ struct AxisEstimator
 class CompensatorImpl
 {
 public:
-  explicit CompensatorImpl(const CompensatorConfig& config) : config_(config)
+  explicit CompensatorImpl(const CompensatorConfig& config) : config_(config), lever_(config.lever_arm)
   {
     std::string why;
     if (!config_.validate(&why))
@@ -197,6 +198,8 @@ public:
     const bool restart_heave = config.heave_filter != config_.heave_filter ||
                                config.heave_corner_frequency != config_.heave_corner_frequency ||
                                config.min_frequency != config_.min_frequency;
+    if (config.lever_arm != config_.lever_arm)
+      lever_.setOffset(config.lever_arm);
     config_ = config;
     if (restart_heave)
       for (AxisEstimator& axis : axes_)
@@ -364,6 +367,7 @@ public:
     mean_force_ = force_time_ = force_samples_ = 0.0;
     rate_ = 0.0;
     counters_.sample_rate = 0.0;
+    lever_.reset();
     resetEstimator();
   }
 
@@ -630,6 +634,7 @@ private:
     out.t = s.t;
     now_ = s.t;
     out.orientation = s.has_orientation ? s.orientation : leveller_.level();
+    const LeverArmOutput lever = lever_.update(out.orientation, dt);
     const Vector3 a = levelAcceleration(s);
     {
       const double yaw_rate = (out.orientation * s.angular_rate).z();
@@ -683,6 +688,13 @@ private:
       state.d_p = axis.d_p;
       out.acceleration_level[i] = compensated;
       out.acceleration_constant_compensated[i] = a[i] - (config_.enable_constant ? constant_bias_[i] : 0.0);
+    }
+    // Default mode: its wave outputs estimate the IMU's wave band, of which R r's is taken off.
+    // Paper mode describes the IMU itself, as in the paper.
+    if (config_.mode == Mode::kDefault)
+    {
+      out.position_wave -= lever.position;
+      out.velocity_wave -= lever.velocity;
     }
     out.calibrated = calibrated_;
     out.state = OutputState::kTracking;
@@ -1009,6 +1021,7 @@ private:
                                ///< sample without an attitude [s]
 
   Leveller leveller_;
+  LeverArm lever_;  ///< the IMU's offset taken off the wave outputs
 
   bool calibrated_ = false;
   bool bias_from_file_ = false;

@@ -228,6 +228,19 @@ void addGains(ParameterTable<C>* table)
           i, [axis, field](auto& config) -> auto& { return config.gains[axis].*field; }));
     }
 }
+
+void addLeverArm(ParameterTable<C>* table)
+{
+  for (int axis = 0; axis < 3; ++axis)
+  {
+    ParameterInfo i = makeInfo(std::string("lever_arm_") + kAxisNames[axis], Reconfigure::kRuntime, "m",
+                               std::string("the IMU's position from the point the odometry describes, ") + kAxisNames[axis] +
+                                   " in the base frame (the wave part of its tilt is taken off odometry/wave; default mode)",
+                               closed(-100.0, 100.0), "not a ship's dimension");
+    table->push_back(
+        makeParameter<double, C>(i, [axis](auto& config) -> auto& { return config.lever_arm[axis]; }));
+  }
+}
 }  // namespace
 
 const ParameterTable<CompensatorConfig>& compensatorParameters()
@@ -277,6 +290,7 @@ const ParameterTable<CompensatorConfig>& compensatorParameters()
                                 "shorter follows the wave accelerations"));
     t.push_back(flagParameter("estimate_gyro_bias", &C::estimate_gyro_bias, run,
                               "estimate the gyro bias on the level axes (gyro attitude)"));
+    addLeverArm(&t);
     t.push_back(numberParameter("gravity", &C::gravity, start, open(9.0, 10.5), "m/s^2", "local gravity magnitude"));
     // 0 is a gap of more than kSlowStreamSteps sample periods (TimeBase).
     t.push_back(numberParameter("max_gap", &C::max_gap, run, atLeast(0.0), "s",

@@ -98,6 +98,11 @@ struct CompensatorConfig
   double tilt_time_constant = 30.0;  ///< GyroAttitudeConfig::tilt_time_constant [s]
   bool estimate_gyro_bias = true;    ///< GyroAttitudeConfig::estimate_bias
 
+  /// The IMU's position from the point whose motion the outputs describe, in the frame of the
+  /// samples (LeverArm): its tilt's wave part is taken off the wave outputs of the default
+  /// mode [m].
+  Vector3 lever_arm{ 0, 0, 0 };
+
   double gravity = kStandardGravity;  ///< local gravity magnitude [m/s^2]
   double max_gap = 0.5;          ///< a confirmed gap longer than this resets the integration [s]
   double max_rate_change = 0.2;  ///< relative sample-rate change that re-plans the FFT [-]
