@@ -444,6 +444,82 @@ def real_errors(name, data, t, total, slow):
     return math.sqrt(np.mean(np.sum(e ** 2, 1))), 'RMS distance from the robot tool position [m]'
 
 
+def wave_track(bag):
+    """Times and positions of an estimator's odometry/wave, or None when it has none."""
+    import numpy as np
+    import rosbag
+    rows = []
+    with rosbag.Bag(bag) as b:
+        for _, m, _ in b.read_messages(topics=['odometry/wave', '/odometry/wave']):
+            p = m.pose.pose.position
+            rows.append((m.header.stamp.to_sec() - STAMP0, p.x, p.y, p.z))
+    return np.array(rows) if rows else None
+
+
+def quat_rotate(quat, v):
+    """v (n x 3) turned by the wxyz quaternions quat (n x 4), each normalised."""
+    import numpy as np
+    q = quat / np.linalg.norm(quat, axis=1, keepdims=True)
+    w, u = q[:, :1], q[:, 1:]
+    return v + 2 * np.cross(u, np.cross(u, v) + w * v)
+
+
+def spectral_displacement(t, accel, quat, band):
+    """The wave displacement of a recording in the frequency domain, independently of the core:
+    the specific force turned into the level frame by the recording's own attitude, gravity taken
+    off, resampled to its median rate, tapered (Tukey, 10 %), divided by -(2 pi f)^2 inside BAND
+    (f_low, f_high) with raised-cosine edges over 30 % of each corner frequency, zero outside.
+    Returns the uniform times and the displacement (n x 3)."""
+    import numpy as np
+    world = quat_rotate(quat, accel) - np.array([0, 0, G])
+    dt = float(np.median(np.diff(t)))
+    grid = np.arange(t[0], t[-1], dt)
+    a = np.stack([np.interp(grid, t, world[:, i]) for i in range(3)], -1)
+    a -= a.mean(0)
+    n = len(grid)
+    k = np.arange(n)
+    edge = max(1, int(0.05 * n))
+    taper = np.ones(n)
+    taper[:edge] = 0.5 - 0.5 * np.cos(np.pi * k[:edge] / edge)
+    taper[-edge:] = taper[:edge][::-1]
+    spectrum = np.fft.rfft(a * taper[:, None], axis=0)
+    f = np.fft.rfftfreq(n, dt)
+    low, high = band
+    gain = np.zeros_like(f)
+    for i, fi in enumerate(f):
+        if fi <= 0.7 * low or fi >= 1.3 * high:
+            continue
+        w = 1.0
+        if fi < 1.3 * low:
+            w = 0.5 - 0.5 * math.cos(math.pi * (fi - 0.7 * low) / (0.6 * low))
+        elif fi > 0.7 * high:
+            w = 0.5 + 0.5 * math.cos(math.pi * (fi - 0.7 * high) / (0.6 * high))
+        gain[i] = -w / (2 * math.pi * fi) ** 2
+    return grid, np.fft.irfft(spectrum * gain[:, None], n=n, axis=0)
+
+
+# Recordings with a wave-like motion compared with spectral_displacement: the band, and the part
+# of the recording compared (after the estimators' start, clear of the taper) [s].
+SPECTRAL_SETS = {'buoy_morro_bay': ((0.04, 0.5), 300.0, 60.0),
+                 'xio_ngimu_heave_30cm': ((0.3, 10.0), 5.0, 3.0)}
+
+
+def spectral_rows(name, reference, track):
+    """Per axis: correlation of the estimator's wave position with the frequency-domain estimate,
+    and 4 x std of each, over the compared part."""
+    import numpy as np
+    _, start, end_margin = SPECTRAL_SETS[name]
+    grid, displacement = reference
+    keep = (grid >= grid[0] + start) & (grid <= grid[-1] - end_margin)
+    rows = []
+    for i, axis in enumerate('xyz'):
+        ours = np.interp(grid[keep], track[:, 0], track[:, i + 1])
+        ref = displacement[keep, i]
+        correlation = float(np.corrcoef(ours, ref)[0, 1]) if ours.std() > 0 and ref.std() > 0 else float('nan')
+        rows.append((axis, correlation, 4 * ours.std(), 4 * ref.std()))
+    return rows
+
+
 NO_ORIENTATION_METHODS = (
     ('default, no orientation: one level frame', 'gyro_attitude: false\n'),
     ('default, no orientation: gyro attitude', 'gyro_attitude: true\nestimate_gyro_bias: false\n'),
@@ -463,6 +539,7 @@ def real(args):
     devels = [d for d, node in ((args.robot_localization, ekf), (args.imu_tools, madgwick)) if node]
     ros = Ros(devels, args.work) if devels else None
     rows = []
+    spectral = []
     try:
         for name, load in REAL_SETS:
             log('real data: %s' % name)
@@ -470,12 +547,14 @@ def real(args):
             stem = os.path.join(args.work, name)
             write_imu_bag(stem + '.bag', t, accel, gyro, quat)
             tracks = {}
+            waves = {}  # method: its output bag
 
             def compensate(method, bag, *extra):
                 subprocess.run([os.path.join(args.bin, 'compensate_bag'), '--in', bag, '--out',
                                 stem + '_%s.bag' % method] + list(extra), check=True,
                                stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
                 tracks[method] = position_track(stem + '_%s.bag' % method)
+                waves[method] = stem + '_%s.bag' % method
             def paper_mode(method, settings):
                 with open(stem + '_%s.yaml' % method, 'w') as f:
                     f.write('mode: paper\n' + settings)
@@ -506,6 +585,12 @@ def real(args):
             for method, (tt, total, slow) in tracks.items():
                 value, what = real_errors(name, args.data, tt, total, slow)
                 rows.append((name, what, method, value))
+            if name in SPECTRAL_SETS:
+                reference = spectral_displacement(t, accel, quat, SPECTRAL_SETS[name][0])
+                for method in waves:
+                    track = wave_track(waves[method])
+                    if track is not None and track[:, 1:].std(0).max() > 0:  # methods with a wave output
+                        spectral.extend((name, method) + row for row in spectral_rows(name, reference, track))
             for f in os.listdir(args.work):
                 if f.startswith(name):
                     os.remove(os.path.join(args.work, f))
@@ -516,6 +601,19 @@ def real(args):
     print('|---|---|---|---|')
     for name, what, method, value in rows:
         print('| %s | %s | %s | %.3f |' % (name, what, method, value))
+    if spectral:
+        print()
+        print('Wave motion (`odometry/wave`) against a frequency-domain estimate of the same recording:')
+        print('its specific force levelled by its own attitude, gravity off, divided by -(2 pi f)^2 in the')
+        print('band (%s), over the part compared (%s).' % (
+            '; '.join('%s %g-%g Hz' % (n, b[0], b[1]) for n, (b, _, _) in SPECTRAL_SETS.items()),
+            '; '.join('%s from %g s to %g s before the end' % (n, a, e) for n, (_, a, e) in SPECTRAL_SETS.items())))
+        print()
+        print('| recording | method | axis | correlation | 4 x std, estimator [m] | 4 x std, frequency domain [m] |')
+        print('|---|---|---|---|---|---|')
+        for name, method, axis, correlation, ours, ref in spectral:
+            print('| %s | %s | %s | %s | %.3f | %.3f |' % (name, method, axis, '-' if math.isnan(correlation)
+                                                              else '%.2f' % correlation, ours, ref))
 
 
 def throughput(args):

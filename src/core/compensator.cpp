@@ -36,6 +36,12 @@ constexpr double kFadeEnd = 1e-3;
 constexpr double kTurnAveraging = 2.0;
 constexpr double kTurnRate = 0.008;
 constexpr double kAfterTurn = 120.0;
+/// Heading change after which the vertical spectrum describes another sea (every encounter
+/// frequency moves) [rad], measured on the heading's moving mean of kHeadingAveraging [s]: the
+/// yaw a sea induces (degrees to tens of degrees on a buoy, at its wave periods) averages out
+/// there, a turn does not.
+constexpr double kRecordTurn = 0.35;
+constexpr double kHeadingAveraging = 10.0;
 /// Most Euler steps of the slow-motion observer per sample (stepDefault).
 constexpr int kMaxObserverSteps = 10000;
 /// Highest sample rate planned for [Hz]: a stamp step far below any IMU's period (a driver
@@ -501,6 +507,7 @@ private:
   void resetMotion()
   {
     turn_rate_ = since_turn_ = 0.0;
+    heading_samples_ = 0;
     for (auto& axis : axes_)
     {
       if (axis.tracker)
@@ -644,6 +651,7 @@ private:
       // the wave band: no horizontal broadband wave then.
       if (!s.has_orientation)
         since_turn_ = 0.0;
+      followHeading(out.orientation, dt);
     }
 
     // Until the window ends the bias is provisional: the running mean of the level acceleration.
@@ -786,6 +794,29 @@ private:
     }
   }
 
+  /// Follows the heading's moving mean; heading_turned_ marks the sample at which it has moved
+  /// kRecordTurn from where the vertical spectrum record began (which then begins anew there).
+  void followHeading(const Eigen::Quaterniond& orientation, double dt)
+  {
+    const Eigen::Matrix3d rotation = orientation.toRotationMatrix();
+    const double heading = std::atan2(rotation(1, 0), rotation(0, 0));
+    heading_turned_ = false;
+    if (heading_samples_++ == 0)
+    {
+      heading_ = heading_mean_ = record_heading_ = heading;
+      return;
+    }
+    heading_ += std::remainder(heading - heading_, 2.0 * M_PI);
+    const double weight = std::max(dt > 0.0 ? 1.0 - std::exp(-dt / kHeadingAveraging) : 0.0,
+                                   1.0 / static_cast<double>(heading_samples_));
+    heading_mean_ += weight * (heading_ - heading_mean_);
+    if (std::abs(heading_mean_ - record_heading_) > kRecordTurn)
+    {
+      heading_turned_ = true;
+      record_heading_ = heading_mean_;
+    }
+  }
+
   /// Default mode with heave_filter: the broadband wave estimate of axis i (BroadbandWave),
   /// blended into the harmonic model's wave output by its share. A horizontal axis may take a
   /// share only when the ship has not turned for kAfterTurn (a turn's centripetal acceleration
@@ -803,7 +834,7 @@ private:
     in.harmonic_position = *wave_x;
     in.locked = axis.locked;
     in.allowed = since_turn_ >= kAfterTurn;
-    in.turning = std::abs(turn_rate_) > kTurnRate;
+    in.turning = heading_turned_;
     in.dt = dt;
     in.rate = rate_;
     const BroadbandWaveOutput out = axis.broadband.update(in);
@@ -1019,6 +1050,11 @@ private:
   double turn_rate_ = 0.0;     ///< level-frame yaw rate averaged over kTurnAveraging [rad/s]
   double since_turn_ = 0.0;    ///< time since it last exceeded kTurnRate, or since the last
                                ///< sample without an attitude [s]
+  long heading_samples_ = 0;     ///< since the heading mean started
+  double heading_ = 0.0;         ///< last heading, unwrapped [rad]
+  double heading_mean_ = 0.0;    ///< its moving mean over kHeadingAveraging [rad]
+  double record_heading_ = 0.0;  ///< heading_mean_ when the vertical spectrum record began [rad]
+  bool heading_turned_ = false;  ///< this sample's heading mean left record_heading_ by kRecordTurn
 
   Leveller leveller_;
   LeverArm lever_;  ///< the IMU's offset taken off the wave outputs

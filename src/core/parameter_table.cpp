@@ -234,9 +234,9 @@ void addLeverArm(ParameterTable<C>* table)
   for (int axis = 0; axis < 3; ++axis)
   {
     ParameterInfo i = makeInfo(std::string("lever_arm_") + kAxisNames[axis], Reconfigure::kRuntime, "m",
-                               std::string("the IMU's position from the point the odometry describes, ") + kAxisNames[axis] +
+                               std::string("position of the IMU from the point the odometry describes, ") + kAxisNames[axis] +
                                    " in the base frame (the wave part of its tilt is taken off odometry/wave; default mode)",
-                               closed(-100.0, 100.0), "not a ship's dimension");
+                               closed(-100.0, 100.0), "beyond the size of a ship");
     table->push_back(
         makeParameter<double, C>(i, [axis](auto& config) -> auto& { return config.lever_arm[axis]; }));
   }

@@ -56,7 +56,7 @@ def real_rows(blocks):
     """{recording: {method: error}} of bench_external.py real's table."""
     found = {}
     for b in blocks or []:
-        if 'table' in b and b['table']['header'][:1] == ['recording']:
+        if 'table' in b and b['table']['header'][:2] == ['recording', 'error against its reference']:
             for rec, _, method, value in b['table']['rows']:
                 try:
                     found.setdefault(rec, {})[method] = float(value)

@@ -44,7 +44,7 @@ struct BroadbandWaveInput
   double harmonic_position = 0.0;  ///< the harmonic model's wave displacement [m]
   bool locked = false;       ///< the harmonic model has a lock
   bool allowed = true;       ///< a horizontal axis may take a broadband share now
-  bool turning = false;      ///< the ship turns: the sea as met changes, its spectrum is measured anew
+  bool turning = false;      ///< the heading has moved: the sea as met changed, its spectrum is measured anew
   double dt = 0.0;           ///< [s] since the previous sample (0: the first)
   double rate = 0.0;         ///< sample rate [Hz] (0: not known yet)
 };
