@@ -145,18 +145,603 @@ Curves curvesOf(const Recording& whole, double fit_fraction, double rate, int ns
   return c;
 }
 
-/// Members of an ensemble: features of the withheld part of each run.
-struct Ensemble
-{
-  std::vector<std::vector<double>> held;
-  EnsembleStats stats;
-};
-
 /// Equivalence classes of effects whose outputs are the same signal (a line is a line).
 bool equivalent(const std::string& a, const std::string& b)
 {
   auto line = [](const std::string& e) { return e == "periodic_bias" || e == "vibration"; };
   return a == b || (line(a) && line(b));
+}
+
+/// What the stages of a diagnosis share, fixed before the first run is simulated (but for the
+/// scenario, which the motion stage may replace).
+struct DiagnoseContext
+{
+  const DiagnoseOptions& opt;
+  Recording real;
+  sim::Scenario scenario;    ///< matched to the recording
+  int runs = 0;              ///< ensemble size
+  bool truth = false;        ///< the recording has a truth
+  bool orientation = false;  ///< the recording has a reported orientation
+  bool temperature = false;  ///< the recording and the scenario have a temperature
+  int nseg = 0;              ///< Welch segment of the withheld part
+  std::vector<int> allan_m;  ///< Allan taus of the withheld part [samples]
+
+  DiagnoseContext(const DiagnoseOptions& options, const Recording& recording) : opt(options), real(recording)
+  {
+  }
+
+  std::uint64_t seed(int i) const
+  {
+    return opt.seed_base + static_cast<std::uint64_t>(i);
+  }
+};
+
+/// Blocks of the truth residual's drift curves.
+constexpr int kTruthBlocks = 64;
+
+/// The base ensemble: whole runs of the scenario, their plot curves (withheld part) and, with a
+/// truth, each run's truth features and residual block means.
+struct BaseEnsemble
+{
+  std::vector<Recording> runs;
+  std::vector<Curves> curves;
+  std::vector<std::vector<double>> truth_members;
+  std::vector<Eigen::MatrixXd> truth_runs;
+};
+
+/// Checks the recording, matches the scenario to it and fills the report's header and the
+/// recording's features of the withheld part.
+DiagnoseContext prepare(const Recording& real_in, const sim::Scenario& scenario_in, const DiagnoseOptions& opt,
+                        Report* rep)
+{
+  DiagnoseContext context(opt, real_in);
+  Recording& real = context.real;
+  if (real.rate <= 0.0)
+  {
+    real.rate = estimateRate(real);
+  }
+  if (real.size() < 200 || real.rate <= 0.0)
+  {
+    throw std::runtime_error("recording too short for a diagnosis (" + std::to_string(real.size()) + " samples)");
+  }
+  context.scenario = matchScenario(scenario_in, real);
+  sim::validateScenario(context.scenario);
+  rep->real_source = real.source;
+  rep->scenario_name = context.scenario.name;
+  rep->rate = real.rate;
+  rep->duration = real.stamp.back() - real.stamp.front();
+  rep->samples = real.size();
+  context.runs = std::max(3, opt.ensemble);
+  context.truth = real.truth.size() >= 3;
+  const Recording real_held = sliceFraction(real, opt.fit_fraction, 1.0);
+  const std::size_t n_held = real_held.size();
+  context.nseg = welchSegment(n_held);
+  for (int m = 1; static_cast<std::size_t>(m) * 10 <= n_held; m *= 2)
+  {
+    context.allan_m.push_back(m);
+  }
+  context.orientation = real.has_orientation;
+  context.temperature = real.has_temperature && context.scenario.temperature.enabled;
+  rep->layout_held = makeLayout(real.rate, n_held, context.orientation, context.temperature);
+  rep->real_held = computeFeatures(real_held, rep->layout_held);
+  return context;
+}
+
+/// Simulates the base ensemble of the context's scenario. With a truth in the recording, each
+/// run's residual against its own truth (then dropped: it is large) is reduced to the truth
+/// features at once; the plot curves of the runs are taken on the way.
+void simulateBase(const DiagnoseContext& context, BaseEnsemble* base)
+{
+  const int runs = context.runs;
+  const DiagnoseOptions& opt = context.opt;
+  base->runs.resize(runs);
+  base->curves.resize(runs);
+  base->truth_members.resize(context.truth ? runs : 0);
+  base->truth_runs.resize(context.truth ? runs : 0);
+  parallelFor(runs, opt.threads, [&](int i) {
+    Recording& run = base->runs[i];
+    run = simulateRecording(context.scenario, context.seed(i), context.truth);
+    run.rate = context.real.rate;
+    base->curves[i] = curvesOf(run, opt.fit_fraction, context.real.rate, context.nseg, context.allan_m);
+    if (context.truth)
+    {
+      const Eigen::MatrixXd res = truthResidual(run, context.scenario.gravity, opt.truth_smooth);
+      base->truth_members[i] = truthFeatures(res, opt.truth_segments);
+      base->truth_runs[i] = blockMeans(res, kTruthBlocks);
+      run.truth = TruthTrack();
+    }
+  });
+}
+
+/// Gap of the withheld part of the recording against the withheld parts of some runs.
+double heldGap(const DiagnoseContext& context, const Report& rep, const std::vector<Recording>& runs)
+{
+  std::vector<std::vector<double>> members(runs.size());
+  parallelFor(static_cast<int>(runs.size()), context.opt.threads, [&](int i) {
+    members[i] = computeFeatures(sliceFraction(runs[i], context.opt.fit_fraction, 1.0), rep.layout_held);
+  });
+  return gapOf(zScores(rep.real_held, ensembleStats(members, rep.layout_held)));
+}
+
+/// 0. Motion: a tilt, heading or sea state of its own is fitted before any sensor effect; the fit
+/// that brings the withheld part closest becomes the scenario of the base ensemble.
+void motionStage(DiagnoseContext* context, BaseEnsemble* base, Report* rep)
+{
+  rep->motion = fitMotion(context->real, context->scenario, base->runs);
+  if (!rep->motion.differs)
+  {
+    return;
+  }
+  rep->motion.gap_before = heldGap(*context, *rep, base->runs);
+  double best = rep->motion.gap_before;
+  for (const MotionCandidate& candidate : rep->motion.candidates)
+  {
+    std::vector<Recording> runs(context->runs);
+    parallelFor(context->runs, context->opt.threads,
+                [&](int i) { runs[i] = simulateRecording(candidate.scenario, context->seed(i)); });
+    const double gap = heldGap(*context, *rep, runs);
+    if (gap < best)
+    {
+      best = gap;
+      rep->motion.adopted = candidate.what;
+      rep->motion.fitted = candidate.scenario;
+    }
+  }
+  if (!rep->motion.adopted.empty())
+  {
+    context->scenario = rep->motion.fitted;
+    simulateBase(*context, base);
+  }
+}
+
+/// The compensator's pipeline stages on the real recording against the same on every run. One
+/// run at a time: the core plans FFTW transforms, and FFTW planning is not thread-safe.
+void compensatorStage(const DiagnoseContext& context, const BaseEnsemble& base, Report* rep)
+{
+  std::vector<std::vector<double>> stage_members(context.runs);
+  for (int i = 0; i < context.runs; ++i)
+  {
+    stage_members[i] = stageFeatures(base.runs[i], 4);
+  }
+  const FeatureLayout layout = stageLayout(rep->duration, 4);
+  rep->stage_where = rankDepartures(stageFeatures(context.real, 4), ensembleStats(stage_members, layout), layout);
+}
+
+/// The recording minus the ideal IMU of its truth, against the same residual of every run.
+void truthStage(const DiagnoseContext& context, const BaseEnsemble& base, Report* rep)
+{
+  const DiagnoseOptions& opt = context.opt;
+  rep->has_truth = true;
+  const Eigen::MatrixXd res = truthResidual(context.real, context.scenario.gravity, opt.truth_smooth);
+  const FeatureLayout layout = truthLayout(rep->duration, opt.truth_segments);
+  rep->truth_where =
+      rankDepartures(truthFeatures(res, opt.truth_segments), ensembleStats(base.truth_members, layout), layout);
+  rep->truth_csv = "channel,t,real,sim_lo,sim_med,sim_hi\n" +
+                   blockCsv(blockMeans(res, kTruthBlocks), base.truth_runs, rep->duration);
+}
+
+/// z-scores of member i of an ensemble against the other members.
+std::vector<double> leaveOneOutZ(const std::vector<std::vector<double>>& members, int i, const FeatureLayout& layout)
+{
+  std::vector<std::vector<double>> rest;
+  for (int j = 0; j < static_cast<int>(members.size()); ++j)
+  {
+    if (j != i)
+    {
+      rest.push_back(members[j]);
+    }
+  }
+  return zScores(members[i], ensembleStats(rest, layout));
+}
+
+/// 1. Where: departures on the whole recording, with the truth and compensator stages, ranked by
+/// |z|; the gap and the null gap of the whole recording.
+void whereStage(const DiagnoseContext& context, const BaseEnsemble& base, Report* rep)
+{
+  rep->layout_all = makeLayout(context.real.rate, context.real.size(), context.orientation, context.temperature);
+  rep->real_all = computeFeatures(context.real, rep->layout_all);
+  std::vector<std::vector<double>> all(context.runs);
+  parallelFor(context.runs, context.opt.threads,
+              [&](int i) { all[i] = computeFeatures(base.runs[i], rep->layout_all); });
+  rep->ens_all = ensembleStats(all, rep->layout_all);
+  rep->where = rankDepartures(rep->real_all, rep->ens_all, rep->layout_all);
+  rep->where.insert(rep->where.end(), rep->truth_where.begin(), rep->truth_where.end());
+  rep->where.insert(rep->where.end(), rep->stage_where.begin(), rep->stage_where.end());
+  std::stable_sort(rep->where.begin(), rep->where.end(),
+                   [](const Departure& a, const Departure& b) { return std::abs(a.z) > std::abs(b.z); });
+  rep->gap_all = gapOf(zScores(rep->real_all, rep->ens_all));
+  for (int i = 0; i < context.runs; ++i)
+  {
+    rep->null_gap = std::max(rep->null_gap, gapOf(leaveOneOutZ(all, i, rep->layout_all)));
+  }
+}
+
+/// 2. Withheld part: the base ensemble's features there, the gap before any candidate and the
+/// null levels. Returns the runs' first parts (for the fit) and drops the whole runs.
+std::vector<Recording> withheldStage(const DiagnoseContext& context, BaseEnsemble* base, Report* rep,
+                                     std::vector<double>* z_before)
+{
+  const int runs = context.runs;
+  const double fit_fraction = context.opt.fit_fraction;
+  std::vector<Recording> base_fit(runs);
+  rep->ens_held_members.resize(runs);
+  parallelFor(runs, context.opt.threads, [&](int i) {
+    base_fit[i] = sliceFraction(base->runs[i], 0.0, fit_fraction);
+    rep->ens_held_members[i] = computeFeatures(sliceFraction(base->runs[i], fit_fraction, 1.0), rep->layout_held);
+  });
+  base->runs.clear();
+  rep->ens_held = ensembleStats(rep->ens_held_members, rep->layout_held);
+  *z_before = zScores(rep->real_held, rep->ens_held);
+  rep->gap_before = gapOf(*z_before);
+  rep->motion.gap_after = rep->gap_before;
+  if (rep->motion.adopted.empty())
+  {
+    rep->motion.gap_before = rep->gap_before;
+  }
+  std::vector<double> null_gaps;
+  for (int i = 0; i < runs; ++i)
+  {
+    const std::vector<double> zn = leaveOneOutZ(rep->ens_held_members, i, rep->layout_held);
+    rep->null_gap_held = std::max(rep->null_gap_held, gapOf(zn));
+    null_gaps.push_back(gapOf(zn));
+    for (double v : zn)
+    {
+      rep->null_max_z_held = std::max(rep->null_max_z_held, std::abs(v));
+    }
+  }
+  std::sort(null_gaps.begin(), null_gaps.end());
+  rep->null_gap_typical = null_gaps[null_gaps.size() / 2];
+  for (double v : *z_before)
+  {
+    rep->max_z_held = std::max(rep->max_z_held, std::abs(v));
+  }
+  return base_fit;
+}
+
+/// Direct detections (stamps, lattice, clipping, gaps) on the whole recording.
+std::vector<DirectDetection> directDetections(const Recording& real)
+{
+  std::vector<DirectDetection> direct;
+  const StampStats st = stampStats(real.stamp, real.rate);
+  char buf[256];
+  std::snprintf(buf, sizeof(buf), "stamp residual robust std %.3g s (rate %.6g Hz), %.0f backwards", st.jitter, st.rate,
+                st.backwards);
+  direct.push_back({ "timestamp_jitter", st.jitter > 0.02 / real.rate, buf });
+  std::snprintf(buf, sizeof(buf), "%.3g %% of samples missing in %.0f gaps (mean %.3g samples)", 100 * st.lost_fraction,
+                st.bursts, st.mean_burst);
+  direct.push_back({ "dropouts", st.bursts > 0, buf });
+  const double repeated = repeatedFraction(real.data);
+  std::snprintf(buf, sizeof(buf), "%.3g %% of the samples repeat their predecessor in all six channels",
+                100 * repeated);
+  direct.push_back({ "sample_hold", repeated > 0.02, buf });
+  std::string lat, clip;
+  bool any_lat = false, any_clip = false;
+  for (int c = 0; c < kChannels; ++c)
+  {
+    const double q = latticeStep(real.data.col(c));
+    double lim = 0;
+    const double ft = flatTopFraction(real.data.col(c), &lim);
+    std::snprintf(buf, sizeof(buf), "%s%s %.4g", lat.empty() ? "" : ", ", channelNames()[c].c_str(), q);
+    lat += buf;
+    std::snprintf(buf, sizeof(buf), "%s%s %.3g %% at %.4g", clip.empty() ? "" : ", ", channelNames()[c].c_str(),
+                  100 * ft, lim);
+    clip += buf;
+    any_lat = any_lat || q > 0;
+    any_clip = any_clip || ft > 1e-4;
+  }
+  direct.push_back({ "quantization", any_lat, "lattice step per axis (0 = none): " + lat });
+  direct.push_back({ "saturation", any_clip, "samples at the largest magnitude: " + clip });
+  return direct;
+}
+
+/// Simulates every candidate with the ensemble's seeds and measures its gap and shrink on the
+/// withheld part.
+void judge(const DiagnoseContext& context, const Report& rep, std::vector<Candidate>* list)
+{
+  const int runs = context.runs;
+  const int nc = static_cast<int>(list->size());
+  std::vector<std::vector<std::vector<double>>> feats(nc, std::vector<std::vector<double>>(runs));
+  std::vector<std::string> errors(nc);
+  parallelFor(nc * runs, context.opt.threads, [&](int idx) {
+    const int c = idx / runs, i = idx % runs;
+    try
+    {
+      const sim::Scenario s = withCandidate(context.scenario, (*list)[c].specs);
+      Recording r = simulateRecording(s, context.seed(i));
+      r.rate = context.real.rate;
+      feats[c][i] = computeFeatures(sliceFraction(r, context.opt.fit_fraction, 1.0), rep.layout_held);
+    }
+    catch (const std::exception& e)
+    {
+      errors[c] = e.what();
+    }
+  });
+  for (int c = 0; c < nc; ++c)
+  {
+    Candidate& candidate = (*list)[c];
+    candidate.gap_before = rep.gap_before;
+    if (!errors[c].empty())
+    {
+      candidate.note += " (not simulated: " + errors[c] + ")";
+      candidate.gap_after = rep.gap_before;
+      candidate.shrink = 0.0;
+      continue;
+    }
+    const EnsembleStats st = ensembleStats(feats[c], rep.layout_held);
+    candidate.z_after = zScores(rep.real_held, st);
+    candidate.gap_after = gapOf(candidate.z_after, st.spread, rep.ens_held.spread);
+    const double excess = rep.gap_before - rep.null_gap_typical;
+    candidate.shrink = excess > 0 ? std::min(1.0, (rep.gap_before - candidate.gap_after) / excess) : 0.0;
+  }
+}
+
+/// Moves candidate i to the front, the others keeping their order.
+void toFront(std::vector<Candidate>* cands, std::size_t i)
+{
+  std::rotate(cands->begin(), cands->begin() + static_cast<std::ptrdiff_t>(i),
+              cands->begin() + static_cast<std::ptrdiff_t>(i) + 1);
+}
+
+/// A pure spectral line is the same signal for periodic_bias and vibration: when the twin
+/// explains at least half as much, the line is named by its frequency (below 1 Hz a periodic
+/// bias, above a vibration: the vocabulary's slow bias and engine line).
+void nameLineByFrequency(std::vector<Candidate>* list)
+{
+  std::vector<Candidate>& cands = *list;
+  if (cands.empty() || (cands[0].effect != "periodic_bias" && cands[0].effect != "vibration"))
+  {
+    return;
+  }
+  double f = -1.0;
+  std::size_t twin = 0;
+  for (std::size_t i = 1; i < cands.size(); ++i)
+  {
+    if (cands[i].effect != cands[0].effect && equivalent(cands[i].effect, cands[0].effect) &&
+        cands[i].shrink >= 0.5 * cands[0].shrink)
+    {
+      twin = i;
+    }
+  }
+  for (const auto& c : cands)
+  {
+    if (c.effect == "vibration" && !c.specs.empty())
+    {
+      f = c.specs.back().params.at("frequency")[0];
+    }
+  }
+  const std::string want = f > 1.0 ? "vibration" : "periodic_bias";
+  if (twin > 0 && f >= 0.0 && cands[twin].effect == want)
+  {
+    toFront(list, twin);
+  }
+}
+
+/// A random walk and a Gauss-Markov bias both explain a wandering bias. The simpler random walk
+/// (no correlation time) is named when it explains about as much (within 0.06), or when the
+/// fitted correlation time exceeds half the recording (over that recording, a random walk) and
+/// it explains nearly as much (within 0.15). A Gauss-Markov bias whose correlation time shows in
+/// the recording leaves the random walk clearly behind (0.15-0.25 in validate_gap).
+void preferRandomWalk(std::vector<Candidate>* list, double duration)
+{
+  std::vector<Candidate>& cands = *list;
+  if (cands.size() < 2 || cands[0].effect != "bias_instability" || cands[0].specs.empty())
+  {
+    return;
+  }
+  const double tc = cands[0].specs.back().params.at("correlation_time")[0];
+  for (std::size_t i = 1; i < cands.size(); ++i)
+  {
+    const double behind = cands[0].shrink - cands[i].shrink;
+    if (cands[i].effect == "bias_random_walk" && (behind < 0.06 || (tc > 0.5 * duration && behind < 0.15)))
+    {
+      toFront(list, i);
+      break;
+    }
+  }
+}
+
+/// The best pair of two different effects, judged; first if it explains clearly more, else last.
+void tryBestPair(const DiagnoseContext& context, const Report& rep, std::vector<Candidate>* list)
+{
+  std::vector<Candidate>& cands = *list;
+  if (cands.size() < 2 || !(cands[0].shrink > 0))
+  {
+    return;
+  }
+  std::size_t j = 1;
+  while (j < cands.size() && equivalent(cands[0].effect, cands[j].effect))
+  {
+    ++j;
+  }
+  if (j >= cands.size() || !(cands[j].shrink > 0))
+  {
+    return;
+  }
+  Candidate pair;
+  pair.effect = cands[0].effect + "+" + cands[j].effect;
+  pair.specs = cands[0].specs;
+  pair.specs.insert(pair.specs.end(), cands[j].specs.begin(), cands[j].specs.end());
+  pair.params_json = "{\"" + cands[0].effect + "\": " + cands[0].params_json + ", \"" + cands[j].effect +
+                     "\": " + cands[j].params_json + "}";
+  pair.note = "best two together";
+  std::vector<Candidate> one{ pair };
+  judge(context, rep, &one);
+  if (one[0].shrink > cands[0].shrink + context.opt.pair_gain)
+  {
+    cands.insert(cands.begin(), one[0]);
+  }
+  else
+  {
+    cands.push_back(one[0]);
+  }
+}
+
+/// 3. Candidates fitted on the first part, judged on the withheld part, ranked by shrink with the
+/// naming rules applied and the best pair added.
+void candidateStage(const DiagnoseContext& context, std::vector<Recording> base_fit, Report* rep)
+{
+  const Recording real_fit = sliceFraction(context.real, 0.0, context.opt.fit_fraction);
+  std::vector<Candidate> cands = fitCandidates(real_fit, base_fit, context.scenario);
+  base_fit.clear();
+  judge(context, *rep, &cands);
+  std::sort(cands.begin(), cands.end(), [](const Candidate& a, const Candidate& b) { return a.shrink > b.shrink; });
+  nameLineByFrequency(&cands);
+  preferRandomWalk(&cands, rep->duration);
+  tryBestPair(context, *rep, &cands);
+  rep->ranking = cands;
+}
+
+/// Verdict: no_gap, none or the best candidate with its confidence.
+void verdictStage(const DiagnoseOptions& opt, Report* rep)
+{
+  const double significant_gap = std::max(1.5 * rep->null_gap_held, 0.05);
+  const bool significant =
+      rep->gap_before > significant_gap || rep->max_z_held > std::max(1.5 * rep->null_max_z_held, 2.0 * kZThreshold);
+  if (!significant)
+  {
+    rep->verdict_effect = "no_gap";
+    rep->verdict_params = "{}";
+    rep->confidence = 0.0;
+    rep->verdict_text = "no significant gap: the recording lies within the simulated ensemble's spread";
+  }
+  else if (rep->ranking.empty() || rep->ranking[0].shrink < opt.min_shrink)
+  {
+    rep->verdict_effect = "none";
+    rep->verdict_params = "{}";
+    rep->confidence = 0.0;
+    rep->shrink_withheld = rep->ranking.empty() ? 0.0 : rep->ranking[0].shrink;
+    rep->verdict_text = "no candidate explains the gap (best shrink below " + num(opt.min_shrink) +
+                        "); the residual is reported in 'where'";
+  }
+  else
+  {
+    const Candidate& b = rep->ranking[0];
+    double second = 0.0;
+    for (std::size_t i = 1; i < rep->ranking.size(); ++i)
+    {
+      const std::string& e = rep->ranking[i].effect;
+      if (!equivalent(e, b.effect) && b.effect.find(e) == std::string::npos && e.find('+') == std::string::npos)
+      {
+        second = std::max(second, rep->ranking[i].shrink);
+      }
+    }
+    rep->best = 0;
+    rep->verdict_effect = b.effect;
+    rep->verdict_params = b.params_json;
+    rep->shrink_withheld = b.shrink;
+    const double margin = b.shrink - std::max(0.0, second);
+    rep->confidence = std::max(0.0, std::min(1.0, b.shrink)) * std::max(0.0, std::min(1.0, 0.4 + margin / 0.4));
+    rep->verdict_text = b.effect + " explains " + num(100.0 * b.shrink) + " % of the gap on the withheld part";
+  }
+}
+
+/// Localised places of the withheld part, before and after the verdict.
+void localise(Report* rep)
+{
+  rep->where_held = rankDepartures(rep->real_held, rep->ens_held, rep->layout_held, kZThreshold, 12);
+  if (rep->best < 0)
+  {
+    return;
+  }
+  const Candidate* best = &rep->ranking[rep->best];
+  for (const Departure& d : rep->where_held)
+  {
+    for (std::size_t i = 0; i < rep->layout_held.info.size(); ++i)
+    {
+      const FeatureInfo& f = rep->layout_held.info[i];
+      if (f.channel == d.where.channel && f.quantity == d.where.quantity && f.range == d.where.range &&
+          f.segment == d.where.segment)
+      {
+        rep->where_held_after.push_back(best->z_after.empty() ? 0.0 : best->z_after[i]);
+        break;
+      }
+    }
+  }
+}
+
+/// Every feature of the withheld part: real, ensemble, z before and after the verdict.
+std::string featuresCsv(const Report& rep, const std::vector<double>& z_before)
+{
+  std::ostringstream fs;
+  fs << "index,channel,quantity,range,segment,lo,hi,real,sim,spread,z_before,z_after\n";
+  for (std::size_t i = 0; i < rep.layout_held.info.size(); ++i)
+  {
+    const FeatureInfo& f = rep.layout_held.info[i];
+    fs << i << "," << f.channel << "," << f.quantity << ",\"" << f.range << "\"," << f.segment << "," << num(f.lo)
+       << "," << num(f.hi) << "," << num(rep.real_held[i]) << "," << num(rep.ens_held.median[i]) << ","
+       << num(rep.ens_held.spread[i]) << "," << num(z_before[i]) << ","
+       << num(rep.best >= 0 && !rep.ranking[rep.best].z_after.empty() ? rep.ranking[rep.best].z_after[i] : z_before[i])
+       << "\n";
+  }
+  return fs.str();
+}
+
+/// Curves for the plots: PSD and Allan of the withheld part (real, ensemble median, ensemble with
+/// the verdict), block means of the whole recording (drift), and the features.
+void plotCurves(const DiagnoseContext& context, const std::vector<Curves>& base_curves,
+                const std::vector<double>& z_before, Report* rep)
+{
+  const int runs = context.runs;
+  const double rate = context.real.rate;
+  const double fit_fraction = context.opt.fit_fraction;
+  const std::vector<int>& ms = context.allan_m;
+  std::vector<sim::EffectSpec> specs;
+  if (rep->best >= 0)
+  {
+    specs = rep->ranking[rep->best].specs;
+  }
+  const sim::Scenario eff = withCandidate(context.scenario, specs);
+  const Curves cr = curvesOf(context.real, fit_fraction, rate, context.nseg, ms);
+  std::vector<Curves> ce(runs);
+  parallelFor(runs, context.opt.threads, [&](int i) {
+    Recording r = simulateRecording(eff, context.seed(i));
+    r.rate = rate;
+    ce[i] = curvesOf(r, fit_fraction, rate, context.nseg, ms);
+  });
+  auto med = [](std::vector<double> v) {
+    std::sort(v.begin(), v.end());
+    return v.empty() ? 0.0 : v[v.size() / 2];
+  };
+  std::ostringstream ps, as;
+  ps << "channel,f,real,sim,sim_effect\n";
+  as << "channel,tau,real,sim,sim_effect\n";
+  for (int ch = 0; ch < kChannels; ++ch)
+  {
+    const std::string& name = channelNames()[ch];
+    for (std::size_t k = 1; k < cr.psd[ch].power.size(); ++k)
+    {
+      std::vector<double> vb, ve;
+      for (int i = 0; i < runs; ++i)
+      {
+        vb.push_back(base_curves[i].psd[ch].power[k]);
+        ve.push_back(ce[i].psd[ch].power[k]);
+      }
+      ps << name << "," << num(k * cr.psd[ch].df) << "," << num(cr.psd[ch].power[k]) << "," << num(med(vb)) << ","
+         << num(med(ve)) << "\n";
+    }
+    for (std::size_t k = 0; k < ms.size(); ++k)
+    {
+      std::vector<double> vb, ve;
+      for (int i = 0; i < runs; ++i)
+      {
+        vb.push_back(base_curves[i].adev[ch][k]);
+        ve.push_back(ce[i].adev[ch][k]);
+      }
+      as << name << "," << num(ms[k] / rate) << "," << num(cr.adev[ch][k]) << "," << num(med(vb)) << "," << num(med(ve))
+         << "\n";
+    }
+  }
+  rep->psd_csv = ps.str();
+  rep->allan_csv = as.str();
+  std::vector<Eigen::MatrixXd> bb, be;
+  for (int i = 0; i < runs; ++i)
+  {
+    bb.push_back(base_curves[i].blocks);
+    be.push_back(ce[i].blocks);
+  }
+  rep->drift_csv =
+      "channel,t,real,sim_lo,sim_med,sim_hi,sim_effect_med\n" + blockCsv(cr.blocks, bb, rep->duration, &be);
+  rep->features_csv = featuresCsv(*rep, z_before);
 }
 }  // namespace
 
@@ -169,460 +754,23 @@ Report diagnose(const Recording& real_in, const sim::Scenario& scenario_in, cons
 {
   const auto wall0 = std::chrono::steady_clock::now();
   Report rep;
-  Recording real = real_in;
-  if (real.rate <= 0.0)
+  DiagnoseContext context = prepare(real_in, scenario_in, opt, &rep);
+  BaseEnsemble base;
+  simulateBase(context, &base);
+  motionStage(&context, &base, &rep);
+  compensatorStage(context, base, &rep);
+  if (context.truth)
   {
-    real.rate = estimateRate(real);
+    truthStage(context, base, &rep);
   }
-  if (real.size() < 200 || real.rate <= 0.0)
-  {
-    throw std::runtime_error("recording too short for a diagnosis (" + std::to_string(real.size()) + " samples)");
-  }
-  sim::Scenario scenario = matchScenario(scenario_in, real);
-  sim::validateScenario(scenario);
-  rep.real_source = real.source;
-  rep.scenario_name = scenario.name;
-  rep.rate = real.rate;
-  rep.duration = real.stamp.back() - real.stamp.front();
-  rep.samples = real.size();
-  const int M = std::max(3, opt.ensemble);
-  auto seedOf = [&opt](int i) { return opt.seed_base + static_cast<std::uint64_t>(i); };
-
-  // Base ensemble, whole recordings. With a truth in the recording, each run's residual against
-  // its own truth (then dropped: it is large) is reduced to the truth features at once.
-  const bool truth = real.truth.size() >= 3;
-  const int truth_blocks = 64;
-  std::vector<std::vector<double>> truth_members(truth ? M : 0);
-  std::vector<Eigen::MatrixXd> truth_runs(truth ? M : 0);
-  // Plot curves of the base runs (withheld part) are taken on the way.
-  const Recording real_held = sliceFraction(real, opt.fit_fraction, 1.0);
-  const std::size_t n_held = real_held.size();
-  const int nseg = welchSegment(n_held);
-  std::vector<int> ms;
-  for (int m = 1; static_cast<std::size_t>(m) * 10 <= n_held; m *= 2)
-  {
-    ms.push_back(m);
-  }
-  std::vector<Curves> cb(M);
-  std::vector<std::vector<double>> stage_members(M);
-  std::vector<Recording> base(M);
-  const auto simulateBase = [&]() {
-    parallelFor(M, opt.threads, [&](int i) {
-      base[i] = simulateRecording(scenario, seedOf(i), truth);
-      base[i].rate = real.rate;
-      cb[i] = curvesOf(base[i], opt.fit_fraction, real.rate, nseg, ms);
-      if (truth)
-      {
-        const Eigen::MatrixXd res = truthResidual(base[i], scenario.gravity, opt.truth_smooth);
-        truth_members[i] = truthFeatures(res, opt.truth_segments);
-        truth_runs[i] = blockMeans(res, truth_blocks);
-        base[i].truth = TruthTrack();
-      }
-    });
-  };
-  simulateBase();
-  const bool orient = real.has_orientation;
-  const bool temp = real.has_temperature && scenario.temperature.enabled;
-  rep.layout_held = makeLayout(real.rate, n_held, orient, temp);
-  rep.real_held = computeFeatures(real_held, rep.layout_held);
-
-  // 0. Motion: a tilt, heading or sea state of its own is fitted before any sensor effect; the
-  // fit that brings the withheld part closest becomes the scenario of the base ensemble.
-  const auto heldGap = [&](const std::vector<Recording>& runs) {
-    std::vector<std::vector<double>> members(runs.size());
-    parallelFor(static_cast<int>(runs.size()), opt.threads, [&](int i) {
-      members[i] = computeFeatures(sliceFraction(runs[i], opt.fit_fraction, 1.0), rep.layout_held);
-    });
-    return gapOf(zScores(rep.real_held, ensembleStats(members, rep.layout_held)));
-  };
-  rep.motion = fitMotion(real, scenario, base);
-  if (rep.motion.differs)
-  {
-    rep.motion.gap_before = heldGap(base);
-    double best = rep.motion.gap_before;
-    for (const MotionCandidate& candidate : rep.motion.candidates)
-    {
-      std::vector<Recording> runs(M);
-      parallelFor(M, opt.threads, [&](int i) { runs[i] = simulateRecording(candidate.scenario, seedOf(i)); });
-      const double gap = heldGap(runs);
-      if (gap < best)
-      {
-        best = gap;
-        rep.motion.adopted = candidate.what;
-        rep.motion.fitted = candidate.scenario;
-      }
-    }
-    if (!rep.motion.adopted.empty())
-    {
-      scenario = rep.motion.fitted;
-      simulateBase();
-    }
-  }
-  {
-    // The compensator's pipeline stages on the real recording against the same on every run.
-    // One run at a time: the core plans FFTW transforms, and FFTW planning is not thread-safe.
-    for (int i = 0; i < M; ++i)
-    {
-      stage_members[i] = stageFeatures(base[i], 4);
-    }
-    const FeatureLayout sl = stageLayout(rep.duration, 4);
-    rep.stage_where = rankDepartures(stageFeatures(real, 4), ensembleStats(stage_members, sl), sl);
-  }
-  if (truth)
-  {
-    rep.has_truth = true;
-    const Eigen::MatrixXd res = truthResidual(real, scenario.gravity, opt.truth_smooth);
-    const FeatureLayout tl = truthLayout(rep.duration, opt.truth_segments);
-    rep.truth_where = rankDepartures(truthFeatures(res, opt.truth_segments), ensembleStats(truth_members, tl), tl);
-    rep.truth_csv = "channel,t,real,sim_lo,sim_med,sim_hi\n" + blockCsv(blockMeans(res, truth_blocks), truth_runs, rep.duration);
-  }
-
-  // 1. Where: whole recording.
-  rep.layout_all = makeLayout(real.rate, real.size(), orient, temp);
-  rep.real_all = computeFeatures(real, rep.layout_all);
-  std::vector<std::vector<double>> all(M);
-  parallelFor(M, opt.threads, [&](int i) { all[i] = computeFeatures(base[i], rep.layout_all); });
-  rep.ens_all = ensembleStats(all, rep.layout_all);
-  rep.where = rankDepartures(rep.real_all, rep.ens_all, rep.layout_all);
-  rep.where.insert(rep.where.end(), rep.truth_where.begin(), rep.truth_where.end());
-  rep.where.insert(rep.where.end(), rep.stage_where.begin(), rep.stage_where.end());
-  std::stable_sort(rep.where.begin(), rep.where.end(),
-                   [](const Departure& a, const Departure& b) { return std::abs(a.z) > std::abs(b.z); });
-  rep.gap_all = gapOf(zScores(rep.real_all, rep.ens_all));
-  for (int i = 0; i < M; ++i)
-  {
-    std::vector<std::vector<double>> rest;
-    for (int j = 0; j < M; ++j)
-    {
-      if (j != i)
-      {
-        rest.push_back(all[j]);
-      }
-    }
-    rep.null_gap = std::max(rep.null_gap, gapOf(zScores(all[i], ensembleStats(rest, rep.layout_all))));
-  }
-
-  // 2. Withheld part: layout, base ensemble.
-  const Recording real_fit = sliceFraction(real, 0.0, opt.fit_fraction);
-  std::vector<Recording> base_fit(M);
-  rep.ens_held_members.resize(M);
-  parallelFor(M, opt.threads, [&](int i) {
-    base_fit[i] = sliceFraction(base[i], 0.0, opt.fit_fraction);
-    rep.ens_held_members[i] = computeFeatures(sliceFraction(base[i], opt.fit_fraction, 1.0), rep.layout_held);
-  });
-  base.clear();
-  rep.ens_held = ensembleStats(rep.ens_held_members, rep.layout_held);
-  const std::vector<double> z_before = zScores(rep.real_held, rep.ens_held);
-  rep.gap_before = gapOf(z_before);
-  rep.motion.gap_after = rep.gap_before;
-  if (rep.motion.adopted.empty())
-  {
-    rep.motion.gap_before = rep.gap_before;
-  }
-  std::vector<double> null_gaps;
-  for (int i = 0; i < M; ++i)
-  {
-    std::vector<std::vector<double>> rest;
-    for (int j = 0; j < M; ++j)
-    {
-      if (j != i)
-      {
-        rest.push_back(rep.ens_held_members[j]);
-      }
-    }
-    const std::vector<double> zn = zScores(rep.ens_held_members[i], ensembleStats(rest, rep.layout_held));
-    rep.null_gap_held = std::max(rep.null_gap_held, gapOf(zn));
-    null_gaps.push_back(gapOf(zn));
-    for (double v : zn)
-    {
-      rep.null_max_z_held = std::max(rep.null_max_z_held, std::abs(v));
-    }
-  }
-  std::sort(null_gaps.begin(), null_gaps.end());
-  rep.null_gap_typical = null_gaps[null_gaps.size() / 2];
-  for (double v : z_before)
-  {
-    rep.max_z_held = std::max(rep.max_z_held, std::abs(v));
-  }
-
-  // Direct detections (stamps, lattice, clipping, gaps) on the whole recording.
-  {
-    const StampStats st = stampStats(real.stamp, real.rate);
-    char buf[256];
-    std::snprintf(buf, sizeof(buf), "stamp residual robust std %.3g s (rate %.6g Hz), %.0f backwards", st.jitter, st.rate,
-                  st.backwards);
-    rep.direct.push_back({ "timestamp_jitter", st.jitter > 0.02 / real.rate, buf });
-    std::snprintf(buf, sizeof(buf), "%.3g %% of samples missing in %.0f gaps (mean %.3g samples)", 100 * st.lost_fraction,
-                  st.bursts, st.mean_burst);
-    rep.direct.push_back({ "dropouts", st.bursts > 0, buf });
-    const double repeated = repeatedFraction(real.data);
-    std::snprintf(buf, sizeof(buf), "%.3g %% of the samples repeat their predecessor in all six channels", 100 * repeated);
-    rep.direct.push_back({ "sample_hold", repeated > 0.02, buf });
-    std::string lat, clip;
-    bool any_lat = false, any_clip = false;
-    for (int c = 0; c < kChannels; ++c)
-    {
-      const double q = latticeStep(real.data.col(c));
-      double lim = 0;
-      const double ft = flatTopFraction(real.data.col(c), &lim);
-      std::snprintf(buf, sizeof(buf), "%s%s %.4g", lat.empty() ? "" : ", ", channelNames()[c].c_str(), q);
-      lat += buf;
-      std::snprintf(buf, sizeof(buf), "%s%s %.3g %% at %.4g", clip.empty() ? "" : ", ", channelNames()[c].c_str(),
-                    100 * ft, lim);
-      clip += buf;
-      any_lat = any_lat || q > 0;
-      any_clip = any_clip || ft > 1e-4;
-    }
-    rep.direct.push_back({ "quantization", any_lat, "lattice step per axis (0 = none): " + lat });
-    rep.direct.push_back({ "saturation", any_clip, "samples at the largest magnitude: " + clip });
-  }
-
-  // 3. Candidates fitted on the first part, judged on the withheld part.
-  std::vector<Candidate> cands = fitCandidates(real_fit, base_fit, scenario);
-  base_fit.clear();
-  auto judge = [&](std::vector<Candidate>& list) {
-    const int nc = static_cast<int>(list.size());
-    std::vector<std::vector<std::vector<double>>> feats(nc, std::vector<std::vector<double>>(M));
-    std::vector<std::string> errors(nc);
-    parallelFor(nc * M, opt.threads, [&](int idx) {
-      const int c = idx / M, i = idx % M;
-      try
-      {
-        const sim::Scenario s = withCandidate(scenario, list[c].specs);
-        Recording r = simulateRecording(s, seedOf(i));
-        r.rate = real.rate;
-        feats[c][i] = computeFeatures(sliceFraction(r, opt.fit_fraction, 1.0), rep.layout_held);
-      }
-      catch (const std::exception& e)
-      {
-        errors[c] = e.what();
-      }
-    });
-    for (int c = 0; c < nc; ++c)
-    {
-      list[c].gap_before = rep.gap_before;
-      if (!errors[c].empty())
-      {
-        list[c].note += " (not simulated: " + errors[c] + ")";
-        list[c].gap_after = rep.gap_before;
-        list[c].shrink = 0.0;
-        continue;
-      }
-      const EnsembleStats st = ensembleStats(feats[c], rep.layout_held);
-      list[c].z_after = zScores(rep.real_held, st);
-      list[c].gap_after = gapOf(list[c].z_after, st.spread, rep.ens_held.spread);
-      const double excess = rep.gap_before - rep.null_gap_typical;
-      list[c].shrink = excess > 0 ? std::min(1.0, (rep.gap_before - list[c].gap_after) / excess) : 0.0;
-    }
-  };
-  judge(cands);
-  std::sort(cands.begin(), cands.end(), [](const Candidate& a, const Candidate& b) { return a.shrink > b.shrink; });
-
-  // A pure spectral line is the same signal for periodic_bias and vibration: when the twin
-  // explains at least half as much, name the line by its frequency (below 1 Hz a periodic bias,
-  // above a vibration: the vocabulary's slow bias and engine line).
-  if (!cands.empty() && (cands[0].effect == "periodic_bias" || cands[0].effect == "vibration"))
-  {
-    double f = -1.0;
-    std::size_t twin = 0;
-    for (std::size_t i = 1; i < cands.size(); ++i)
-    {
-      if (cands[i].effect != cands[0].effect && equivalent(cands[i].effect, cands[0].effect) &&
-          cands[i].shrink >= 0.5 * cands[0].shrink)
-      {
-        twin = i;
-      }
-    }
-    for (const auto& c : cands)
-    {
-      if (c.effect == "vibration" && !c.specs.empty())
-      {
-        f = c.specs.back().params.at("frequency")[0];
-      }
-    }
-    const std::string want = f > 1.0 ? "vibration" : "periodic_bias";
-    if (twin > 0 && f >= 0.0 && cands[twin].effect == want)
-    {
-      std::rotate(cands.begin(), cands.begin() + static_cast<std::ptrdiff_t>(twin), cands.begin() + static_cast<std::ptrdiff_t>(twin) + 1);
-    }
-  }
-  // A random walk and a Gauss-Markov bias both explain a wandering bias. Name the simpler random
-  // walk (no correlation time) when it explains about as much (within 0.06), or when the
-  // fitted correlation time exceeds half the recording (over that recording, a random walk) and
-  // it explains nearly as much (within 0.15). A Gauss-Markov bias whose correlation time shows
-  // in the recording leaves the random walk clearly behind (0.15-0.25 in validate_gap).
-  if (cands.size() >= 2 && cands[0].effect == "bias_instability" && !cands[0].specs.empty())
-  {
-    const double tc = cands[0].specs.back().params.at("correlation_time")[0];
-    for (std::size_t i = 1; i < cands.size(); ++i)
-    {
-      const double behind = cands[0].shrink - cands[i].shrink;
-      if (cands[i].effect == "bias_random_walk" && (behind < 0.06 || (tc > 0.5 * rep.duration && behind < 0.15)))
-      {
-        std::rotate(cands.begin(), cands.begin() + static_cast<std::ptrdiff_t>(i), cands.begin() + static_cast<std::ptrdiff_t>(i) + 1);
-        break;
-      }
-    }
-  }
-  // Best pair of two different effects, if it explains clearly more.
-  if (cands.size() >= 2 && cands[0].shrink > 0)
-  {
-    std::size_t j = 1;
-    while (j < cands.size() && equivalent(cands[0].effect, cands[j].effect))
-    {
-      ++j;
-    }
-    if (j < cands.size() && cands[j].shrink > 0)
-    {
-      Candidate pair;
-      pair.effect = cands[0].effect + "+" + cands[j].effect;
-      pair.specs = cands[0].specs;
-      pair.specs.insert(pair.specs.end(), cands[j].specs.begin(), cands[j].specs.end());
-      pair.params_json = "{\"" + cands[0].effect + "\": " + cands[0].params_json + ", \"" + cands[j].effect +
-                         "\": " + cands[j].params_json + "}";
-      pair.note = "best two together";
-      std::vector<Candidate> one{ pair };
-      judge(one);
-      if (one[0].shrink > cands[0].shrink + opt.pair_gain)
-      {
-        cands.insert(cands.begin(), one[0]);
-      }
-      else
-      {
-        cands.push_back(one[0]);
-      }
-    }
-  }
-  rep.ranking = cands;
-
-  // Verdict.
-  const double significant_gap = std::max(1.5 * rep.null_gap_held, 0.05);
-  const bool significant = rep.gap_before > significant_gap ||
-                           rep.max_z_held > std::max(1.5 * rep.null_max_z_held, 2.0 * kZThreshold);
-  if (!significant)
-  {
-    rep.verdict_effect = "no_gap";
-    rep.verdict_params = "{}";
-    rep.confidence = 0.0;
-    rep.verdict_text = "no significant gap: the recording lies within the simulated ensemble's spread";
-  }
-  else if (rep.ranking.empty() || rep.ranking[0].shrink < opt.min_shrink)
-  {
-    rep.verdict_effect = "none";
-    rep.verdict_params = "{}";
-    rep.confidence = 0.0;
-    rep.shrink_withheld = rep.ranking.empty() ? 0.0 : rep.ranking[0].shrink;
-    rep.verdict_text = "no candidate explains the gap (best shrink below " + num(opt.min_shrink) + "); the residual is reported in 'where'";
-  }
-  else
-  {
-    const Candidate& b = rep.ranking[0];
-    double second = 0.0;
-    for (std::size_t i = 1; i < rep.ranking.size(); ++i)
-    {
-      const std::string& e = rep.ranking[i].effect;
-      if (!equivalent(e, b.effect) && b.effect.find(e) == std::string::npos && e.find('+') == std::string::npos)
-      {
-        second = std::max(second, rep.ranking[i].shrink);
-      }
-    }
-    rep.best = 0;
-    rep.verdict_effect = b.effect;
-    rep.verdict_params = b.params_json;
-    rep.shrink_withheld = b.shrink;
-    const double margin = b.shrink - std::max(0.0, second);
-    rep.confidence = std::max(0.0, std::min(1.0, b.shrink)) * std::max(0.0, std::min(1.0, 0.4 + margin / 0.4));
-    rep.verdict_text = b.effect + " explains " + num(100.0 * b.shrink) + " % of the gap on the withheld part";
-  }
-  // Localised places of the withheld part, before and after the verdict.
-  rep.where_held = rankDepartures(rep.real_held, rep.ens_held, rep.layout_held, kZThreshold, 12);
-  if (rep.best >= 0)
-  {
-    const Candidate* best = &rep.ranking[rep.best];
-    for (const Departure& d : rep.where_held)
-    {
-      for (std::size_t i = 0; i < rep.layout_held.info.size(); ++i)
-      {
-        const FeatureInfo& f = rep.layout_held.info[i];
-        if (f.channel == d.where.channel && f.quantity == d.where.quantity && f.range == d.where.range &&
-            f.segment == d.where.segment)
-        {
-          rep.where_held_after.push_back(best->z_after.empty() ? 0.0 : best->z_after[i]);
-          break;
-        }
-      }
-    }
-  }
-  // Curves for plots: PSD and Allan of the withheld part (real, ensemble median, ensemble with
-  // the verdict), block means of the whole recording (drift).
-  {
-    std::vector<sim::EffectSpec> specs;
-    if (rep.best >= 0)
-    {
-      specs = rep.ranking[rep.best].specs;
-    }
-    const sim::Scenario eff = withCandidate(scenario, specs);
-    const Curves cr = curvesOf(real, opt.fit_fraction, real.rate, nseg, ms);
-    std::vector<Curves> ce(M);
-    parallelFor(M, opt.threads, [&](int i) {
-      Recording r = simulateRecording(eff, seedOf(i));
-      r.rate = real.rate;
-      ce[i] = curvesOf(r, opt.fit_fraction, real.rate, nseg, ms);
-    });
-    auto med = [](std::vector<double> v) {
-      std::sort(v.begin(), v.end());
-      return v.empty() ? 0.0 : v[v.size() / 2];
-    };
-    std::ostringstream ps, as;
-    ps << "channel,f,real,sim,sim_effect\n";
-    as << "channel,tau,real,sim,sim_effect\n";
-    for (int ch = 0; ch < kChannels; ++ch)
-    {
-      const std::string& name = channelNames()[ch];
-      for (std::size_t k = 1; k < cr.psd[ch].power.size(); ++k)
-      {
-        std::vector<double> vb, ve;
-        for (int i = 0; i < M; ++i)
-        {
-          vb.push_back(cb[i].psd[ch].power[k]);
-          ve.push_back(ce[i].psd[ch].power[k]);
-        }
-        ps << name << "," << num(k * cr.psd[ch].df) << "," << num(cr.psd[ch].power[k]) << "," << num(med(vb)) << ","
-           << num(med(ve)) << "\n";
-      }
-      for (std::size_t k = 0; k < ms.size(); ++k)
-      {
-        std::vector<double> vb, ve;
-        for (int i = 0; i < M; ++i)
-        {
-          vb.push_back(cb[i].adev[ch][k]);
-          ve.push_back(ce[i].adev[ch][k]);
-        }
-        as << name << "," << num(ms[k] / real.rate) << "," << num(cr.adev[ch][k]) << "," << num(med(vb)) << ","
-           << num(med(ve)) << "\n";
-      }
-    }
-    rep.psd_csv = ps.str();
-    rep.allan_csv = as.str();
-    std::vector<Eigen::MatrixXd> bb, be;
-    for (int i = 0; i < M; ++i)
-    {
-      bb.push_back(cb[i].blocks);
-      be.push_back(ce[i].blocks);
-    }
-    rep.drift_csv = "channel,t,real,sim_lo,sim_med,sim_hi,sim_effect_med\n" + blockCsv(cr.blocks, bb, rep.duration, &be);
-    std::ostringstream fs;
-    fs << "index,channel,quantity,range,segment,lo,hi,real,sim,spread,z_before,z_after\n";
-    for (std::size_t i = 0; i < rep.layout_held.info.size(); ++i)
-    {
-      const FeatureInfo& f = rep.layout_held.info[i];
-      fs << i << "," << f.channel << "," << f.quantity << ",\"" << f.range << "\"," << f.segment << "," << num(f.lo) << ","
-         << num(f.hi) << "," << num(rep.real_held[i]) << "," << num(rep.ens_held.median[i]) << ","
-         << num(rep.ens_held.spread[i]) << "," << num(z_before[i]) << ","
-         << num(rep.best >= 0 && !rep.ranking[rep.best].z_after.empty() ? rep.ranking[rep.best].z_after[i] : z_before[i]) << "\n";
-    }
-    rep.features_csv = fs.str();
-  }
+  whereStage(context, base, &rep);
+  std::vector<double> z_before;
+  std::vector<Recording> base_fit = withheldStage(context, &base, &rep, &z_before);
+  rep.direct = directDetections(context.real);
+  candidateStage(context, std::move(base_fit), &rep);
+  verdictStage(opt, &rep);
+  localise(&rep);
+  plotCurves(context, base.curves, z_before, &rep);
   rep.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
   return rep;
 }

@@ -7,6 +7,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
+#include <optional>
 #include <sstream>
 
 #include <Eigen/Dense>
@@ -333,17 +335,6 @@ struct Cmp
   }
 };
 
-template <typename F>
-Cmp compare(const FitStats& real, const std::vector<FitStats>& sims, F f)
-{
-  Vec v;
-  for (const auto& s : sims)
-  {
-    v.push_back(f(s));
-  }
-  return { f(real), meanOf(v), stdOf(v) };
-}
-
 /// Bins where the ensemble's PSD of a channel is motion (20 x above its high-frequency floor).
 std::vector<std::size_t> motionBins(const std::vector<FitStats>& sims, int c)
 {
@@ -564,6 +555,917 @@ double wrapAngle(double a)
   }
   return a;
 }
+/// Allan variance of the recording against the ensemble, per channel: at the sample taus shorter
+/// than a block, then at the long taus of 32 block means of (recording - ensemble mean of the
+/// other runs), which takes a motion common to the runs out of the long-tau Allan variance.
+struct AllanExcess
+{
+  std::vector<Vec> tau;     ///< [s]
+  std::vector<Vec> excess;  ///< real minus ensemble Allan variance
+  std::vector<Vec> null;    ///< the ensemble's own Allan variance (at least 1e-300)
+  std::vector<Vec> spread;  ///< its standard deviation over the runs
+
+  /// Excess beyond 4 spreads and 5 % of the ensemble's own variance.
+  bool significant(int c, std::size_t k) const
+  {
+    return excess[c][k] > 4.0 * spread[c][k] && excess[c][k] > 0.05 * null[c][k];
+  }
+};
+
+/// The strongest excess spectral line per channel and the ensemble's mean fine PSD.
+struct LineSearch
+{
+  std::vector<Line> lines;    ///< per channel (power 0: none)
+  std::vector<Vec> mean_psd;  ///< per channel, ensemble mean of the fine PSD
+};
+
+/// What the fitters share, built once: the statistics of the recording and of every run.
+struct FitContext
+{
+  const Recording& real;
+  const std::vector<Recording>& runs;
+  const sim::Scenario& scenario;
+  double rate;
+  std::size_t samples;  ///< the shortest of the recording and the runs
+  bool temperature;     ///< the scenario and the recording have a temperature
+  double start;         ///< the recording's stamp at elapsed 0 of the matched scenario
+  FitStats real_stats;
+  std::vector<FitStats> run_stats;
+  std::optional<AllanExcess> allan;  ///< none when the recording is too short for one tau
+  LineSearch line_search;
+
+  /// A statistic of the recording against the ensemble's mean and spread.
+  template <typename F>
+  Cmp measure(F statistic) const
+  {
+    Vec v;
+    for (const auto& s : run_stats)
+    {
+      v.push_back(statistic(s));
+    }
+    return { statistic(real_stats), meanOf(v), stdOf(v) };
+  }
+};
+
+/// Blocks of the long-tau Allan variance.
+constexpr int kAllanBlocks = 32;
+
+/// kAllanBlocks block means of every channel of a recording, each of block_length samples.
+Eigen::MatrixXd blockMeans(const Recording& r, std::size_t block_length)
+{
+  Eigen::MatrixXd means(kAllanBlocks, kChannels);
+  for (int k = 0; k < kAllanBlocks; ++k)
+  {
+    means.row(k) = r.data.middleRows(k * block_length, block_length).colwise().mean();
+  }
+  return means;
+}
+
+AllanExcess allanExcess(const FitContext& context, const std::vector<int>& allan_m)
+{
+  const std::size_t block_length = context.samples / kAllanBlocks;
+  const double block_seconds = block_length / context.rate;
+  const int runs = static_cast<int>(context.runs.size());
+  std::vector<Eigen::MatrixXd> run_blocks(runs);
+  Eigen::MatrixXd sum = Eigen::MatrixXd::Zero(kAllanBlocks, kChannels);
+  for (int j = 0; j < runs; ++j)
+  {
+    run_blocks[j] = blockMeans(context.runs[j], block_length);
+    sum += run_blocks[j];
+  }
+  const Eigen::MatrixXd real_blocks = blockMeans(context.real, block_length) - sum / runs;
+  const std::vector<int> block_m = { 1, 2, 4, 8 };
+  AllanExcess out;
+  out.tau.resize(kChannels);
+  out.excess.resize(kChannels);
+  out.null.resize(kChannels);
+  out.spread.resize(kChannels);
+  for (int c = 0; c < kChannels; ++c)
+  {
+    for (std::size_t k = 0; k < allan_m.size(); ++k)
+    {
+      const double t = allan_m[k] / context.rate;
+      if (t >= block_seconds)
+      {
+        break;
+      }
+      const Cmp m = context.measure([c, k](const FitStats& st) { return st.avar[c][k]; });
+      out.tau[c].push_back(t);
+      out.excess[c].push_back(m.real - m.sim);
+      out.null[c].push_back(std::max(m.sim, 1e-300));
+      out.spread[c].push_back(m.spread);
+    }
+    const Eigen::VectorXd real_column = real_blocks.col(c);
+    const Vec real_adev = allanDeviation(real_column, block_m);
+    std::vector<Vec> run_avar(block_m.size());
+    for (int j = 0; j < runs; ++j)
+    {
+      const Eigen::VectorXd dj = run_blocks[j].col(c) - (sum.col(c) - run_blocks[j].col(c)) / std::max(1, runs - 1);
+      const Vec a = allanDeviation(dj, block_m);
+      for (std::size_t k = 0; k < block_m.size(); ++k)
+      {
+        run_avar[k].push_back(std::isfinite(a[k]) ? a[k] * a[k] : 0.0);
+      }
+    }
+    for (std::size_t k = 0; k < block_m.size(); ++k)
+    {
+      if (!std::isfinite(real_adev[k]))
+      {
+        continue;
+      }
+      // (runs - 1) / runs: a leave-one-out residual carries more of the others' noise than the real one
+      const double null = meanOf(run_avar[k]) * (runs - 1.0) / runs;
+      out.tau[c].push_back(block_m[k] * block_seconds);
+      out.excess[c].push_back(real_adev[k] * real_adev[k] - null);
+      out.null[c].push_back(std::max(null, 1e-300));
+      out.spread[c].push_back(stdOf(run_avar[k]));
+    }
+  }
+  return out;
+}
+
+LineSearch lineSearch(const FitContext& context)
+{
+  LineSearch out;
+  out.lines.resize(kChannels);
+  out.mean_psd.resize(kChannels);
+  for (int c = 0; c < kChannels; ++c)
+  {
+    out.mean_psd[c] = meanPsd(context.run_stats, c);
+    // The ensemble's own line spread: require a clear excess over its largest member.
+    Vec max_psd = out.mean_psd[c];
+    for (const auto& s : context.run_stats)
+    {
+      for (std::size_t k = 0; k < max_psd.size(); ++k)
+      {
+        max_psd[k] = std::max(max_psd[k], s.psd_fine[c].power[k]);
+      }
+    }
+    out.lines[c] = strongestLine(context.real_stats.psd_fine[c], max_psd, 6.0);
+    if (out.lines[c].power > 0)
+    {
+      out.lines[c] = strongestLine(context.real_stats.psd_fine[c], out.mean_psd[c], 6.0);
+    }
+  }
+  return out;
+}
+
+/// One fitted effect: what it puts in the scenario and how it was fitted.
+struct Fit
+{
+  std::vector<sim::EffectSpec> specs;
+  std::string note;
+};
+
+/// Adds the scenario's own values of an additive effect's accel and gyro parameters (summed over
+/// its occurrences) to the fitted differences.
+void addPresent(const std::vector<sim::EffectSpec>& present, const std::string& accel_key, const std::string& gyro_key,
+                Vec* acc, Vec* gyr)
+{
+  const Vec a0 = sumParam(present, accel_key, acc->size()), g0 = sumParam(present, gyro_key, gyr->size());
+  for (std::size_t i = 0; i < acc->size(); ++i)
+  {
+    (*acc)[i] += a0[i];
+    (*gyr)[i] += g0[i];
+  }
+}
+
+/// Real minus ensemble of a per-channel statistic on the channels where it departs by more than
+/// 4 spreads plus a floor (accel_floor on the accelerometer, gyro_floor on the gyro); the other
+/// channels are left as they are. True if any channel departs.
+template <typename F>
+bool channelShifts(const FitContext& context, F statistic, double accel_floor, double gyro_floor, Vec* acc, Vec* gyr)
+{
+  bool any = false;
+  for (int c = 0; c < kChannels; ++c)
+  {
+    const Cmp m = context.measure([&statistic, c](const FitStats& s) { return statistic(s, c); });
+    if (m.significant(4.0, c < 3 ? accel_floor : gyro_floor))
+    {
+      (c < 3 ? (*acc)[c] : (*gyr)[c - 3]) = m.real - m.sim;
+      any = true;
+    }
+  }
+  return any;
+}
+
+/// constant_bias: the difference of means per axis, beyond 4 ensemble spreads.
+std::optional<Fit> fitConstantBias(const FitContext& context)
+{
+  Vec acc(3, 0.0), gyr(3, 0.0);
+  if (!channelShifts(
+          context, [](const FitStats& s, int c) { return s.mean[c]; }, 1e-5, 1e-7, &acc, &gyr))
+  {
+    return std::nullopt;
+  }
+  addPresent(existing(context.scenario, "constant_bias"), "accel", "gyro", &acc, &gyr);
+  sim::EffectSpec e{ "constant_bias", true, {} };
+  e.params["accel"] = clampVec(acc, -100, 100);
+  e.params["gyro"] = clampVec(gyr, -10, 10);
+  return Fit{ { e }, "mean of real minus mean of the ensemble, per axis" };
+}
+
+/// white_noise: the PSD floor in the upper half of the band.
+std::optional<Fit> fitWhiteNoise(const FitContext& context)
+{
+  Vec acc(3, 0.0), gyr(3, 0.0);
+  bool any = false;
+  const auto present = existing(context.scenario, "white_noise");
+  const Vec a2 = sumSquares(present, "accel_density"), g2 = sumSquares(present, "gyro_density");
+  for (int c = 0; c < kChannels; ++c)
+  {
+    auto floorOf = [c](const FitStats& s) {
+      const auto& p = s.psd[c].power;
+      Vec v(p.begin() + p.size() / 2, p.end() - p.size() / 20);
+      return medianOf(v);
+    };
+    const Cmp m = context.measure(floorOf);
+    const double base = c < 3 ? a2[c] : g2[c - 3];
+    double d2 = base + (m.real - m.sim) / 2.0;
+    if (m.significant(4.0) && std::abs(m.real - m.sim) > 0.1 * m.sim)
+    {
+      any = true;
+    }
+    d2 = std::max(0.0, d2);
+    (c < 3 ? acc[c] : gyr[c - 3]) = std::sqrt(d2);
+  }
+  if (!any)
+  {
+    return std::nullopt;
+  }
+  sim::EffectSpec e{ "white_noise", true, {} };
+  e.params["accel_density"] = clampVec(acc, 0, 10);
+  e.params["gyro_density"] = clampVec(gyr, 0, 10);
+  return Fit{ { e }, "PSD floor (upper half band): density^2 += (P_real - P_sim) / 2" };
+}
+
+/// bias_random_walk: the Allan variance excess at the 3 longest taus.
+std::optional<Fit> fitBiasRandomWalk(const FitContext& context)
+{
+  if (!context.allan)
+  {
+    return std::nullopt;
+  }
+  const AllanExcess& allan = *context.allan;
+  Vec acc(3, 0.0), gyr(3, 0.0);
+  bool any = false;
+  for (int c = 0; c < kChannels; ++c)
+  {
+    Vec k2;
+    bool sig = false;
+    const std::size_t nt = allan.tau[c].size();
+    for (std::size_t k = nt >= 3 ? nt - 3 : 0; k < nt; ++k)
+    {
+      if (allan.excess[c][k] > 0)
+      {
+        k2.push_back(3.0 * allan.excess[c][k] / allan.tau[c][k]);
+      }
+      sig = sig || allan.significant(c, k);
+    }
+    if (sig && !k2.empty())
+    {
+      (c < 3 ? acc[c] : gyr[c - 3]) = std::sqrt(medianOf(k2));
+      any = true;
+    }
+  }
+  if (!any)
+  {
+    return std::nullopt;
+  }
+  const auto present = existing(context.scenario, "bias_random_walk");
+  const Vec a2 = sumSquares(present, "accel_density"), g2 = sumSquares(present, "gyro_density");
+  for (int i = 0; i < 3; ++i)
+  {
+    acc[i] = std::sqrt(acc[i] * acc[i] + a2[i]);
+    gyr[i] = std::sqrt(gyr[i] * gyr[i] + g2[i]);
+  }
+  sim::EffectSpec e{ "bias_random_walk", true, {} };
+  e.params["accel_density"] = clampVec(acc, 0, 10);
+  e.params["gyro_density"] = clampVec(gyr, 0, 10);
+  return Fit{ { e }, "Allan variance excess at the 3 longest taus = K^2 tau / 3" };
+}
+
+/// Weighted least-squares sigma^2 of a Gauss-Markov Allan curve with correlation time tc on a
+/// channel's Allan excess; adds the weighted squared residuals to *cost.
+double gaussMarkovVariance(const AllanExcess& allan, int c, double tc, double* cost)
+{
+  double num = 0, den = 0;
+  for (std::size_t k = 0; k < allan.tau[c].size(); ++k)
+  {
+    const double g = gaussMarkovAllanVariance(allan.tau[c][k], tc);
+    const double w = 1.0 / (allan.null[c][k] + std::max(allan.excess[c][k], 0.0));
+    num += allan.excess[c][k] * g * w * w;
+    den += g * g * w * w;
+  }
+  const double s2 = den > 0 ? std::max(0.0, num / den) : 0.0;
+  for (std::size_t k = 0; k < allan.tau[c].size(); ++k)
+  {
+    const double g = gaussMarkovAllanVariance(allan.tau[c][k], tc);
+    const double w = 1.0 / (allan.null[c][k] + std::max(allan.excess[c][k], 0.0));
+    *cost += std::pow((allan.excess[c][k] - s2 * g) * w, 2);
+  }
+  return s2;
+}
+
+/// bias_instability: a grid over correlation times, sigma^2 by weighted least squares.
+std::optional<Fit> fitBiasInstability(const FitContext& context)
+{
+  if (!context.allan)
+  {
+    return std::nullopt;
+  }
+  const AllanExcess& allan = *context.allan;
+  std::vector<bool> sig(kChannels, false);
+  bool any = false;
+  for (int c = 0; c < kChannels; ++c)
+  {
+    for (std::size_t k = 0; k < allan.tau[c].size(); ++k)
+    {
+      if (allan.significant(c, k))
+      {
+        sig[c] = true;
+      }
+    }
+    any = any || sig[c];
+  }
+  if (!any)
+  {
+    return std::nullopt;
+  }
+  double best_cost = std::numeric_limits<double>::infinity();
+  double best_tc = 0;
+  Vec best_sigma(kChannels, 0.0);
+  const double span = context.samples / context.rate;
+  for (double tc = 2.0 / context.rate; tc <= 2.0 * span; tc *= std::sqrt(2.0))
+  {
+    double cost = 0.0;
+    Vec sigma(kChannels, 0.0);
+    for (int c = 0; c < kChannels; ++c)
+    {
+      if (sig[c])
+      {
+        sigma[c] = std::sqrt(gaussMarkovVariance(allan, c, tc, &cost));
+      }
+    }
+    if (cost < best_cost)
+    {
+      best_cost = cost;
+      best_tc = tc;
+      best_sigma = sigma;
+    }
+  }
+  if (!(best_tc > 0 && anyNonZero(best_sigma)))
+  {
+    return std::nullopt;
+  }
+  std::vector<sim::EffectSpec> specs = existing(context.scenario, "bias_instability");
+  sim::EffectSpec e{ "bias_instability", true, {} };
+  e.params["accel_sigma"] = clampVec(Vec(best_sigma.begin(), best_sigma.begin() + 3), 0, 100);
+  e.params["gyro_sigma"] = clampVec(Vec(best_sigma.begin() + 3, best_sigma.end()), 0, 10);
+  e.params["correlation_time"] = { std::max(1e-3, best_tc) };
+  specs.push_back(e);
+  return Fit{ specs, "Allan variance excess fitted by a Gauss-Markov curve (grid over correlation time)" };
+}
+
+/// scale_factor: the motion-band power ratio; on an axis carrying gravity, the ratio of means.
+std::optional<Fit> fitScaleFactor(const FitContext& context)
+{
+  Vec acc(3, 0.0), gyr(3, 0.0);
+  bool any = false;
+  for (int c = 0; c < kChannels; ++c)
+  {
+    const Cmp mm = context.measure([c](const FitStats& s) { return s.mean[c]; });
+    if (c < 3 && std::abs(mm.sim) > 1.0)
+    {
+      // an axis carrying gravity: its mean scales (indistinguishable from a bias on this axis)
+      if (mm.significant(4.0, 1e-5))
+      {
+        acc[c] = mm.real / mm.sim - 1.0;
+        any = true;
+      }
+      continue;
+    }
+    const auto bins = motionBins(context.run_stats, c);
+    if (bins.size() < 2)
+    {
+      continue;
+    }
+    auto power = [&bins, c](const FitStats& s) {
+      double p = 0.0;
+      for (std::size_t k : bins)
+      {
+        p += s.psd[c].power[k];
+      }
+      return std::sqrt(p);
+    };
+    const Cmp m = context.measure(power);
+    if (m.sim > 0 && m.significant(4.0) && std::abs(m.real / m.sim - 1.0) > 0.002)
+    {
+      (c < 3 ? acc[c] : gyr[c - 3]) = m.real / m.sim - 1.0;
+      any = true;
+    }
+  }
+  if (!any)
+  {
+    return std::nullopt;
+  }
+  const auto present = existing(context.scenario, "scale_factor");
+  Vec a0(3, 1.0), g0(3, 1.0);
+  for (const auto& e : present)
+  {
+    for (int i = 0; i < 3; ++i)
+    {
+      a0[i] *= 1.0 + e.params.at("accel")[i];
+      g0[i] *= 1.0 + e.params.at("gyro")[i];
+    }
+  }
+  for (int i = 0; i < 3; ++i)
+  {
+    acc[i] = a0[i] * (1.0 + acc[i]) - 1.0;
+    gyr[i] = g0[i] * (1.0 + gyr[i]) - 1.0;
+  }
+  sim::EffectSpec e{ "scale_factor", true, {} };
+  e.params["accel"] = clampVec(acc, -0.5, 0.5);
+  e.params["gyro"] = clampVec(gyr, -0.5, 0.5);
+  return Fit{ { e }, "sqrt of motion-band power ratio real / ensemble" };
+}
+
+/// The accelerometer axis carrying gravity in the ensemble (the largest mean above 1 m/s^2), -1
+/// if none.
+int gravityAxis(const std::vector<FitStats>& ensemble)
+{
+  int axis = -1;
+  for (int j = 0; j < 3; ++j)
+  {
+    Vec means;
+    for (const auto& st : ensemble)
+    {
+      means.push_back(st.mean[j]);
+    }
+    if (std::abs(meanOf(means)) > 1.0 && (axis < 0 || std::abs(ensemble[0].mean[j]) > std::abs(ensemble[0].mean[axis])))
+    {
+      axis = j;
+    }
+  }
+  return axis;
+}
+
+/// Misalignment onto the gravity axis j: the mean of each other accelerometer axis i moves by
+/// M_ij g. Writes accel[3 i + j]; true if any is significant.
+bool gravityCoupling(const FitContext& context, int j, Vec* accel)
+{
+  bool any = false;
+  for (int i = 0; i < 3; ++i)
+  {
+    if (i == j)
+    {
+      continue;
+    }
+    const Cmp mi = context.measure([i](const FitStats& st) { return st.mean[i]; });
+    const Cmp mj = context.measure([j](const FitStats& st) { return st.mean[j]; });
+    if (mi.significant(4.0, 1e-5))
+    {
+      (*accel)[3 * i + j] = (mi.real - mi.sim) / mj.sim;
+      any = true;
+    }
+  }
+  return any;
+}
+
+/// Misalignment of sensor s (0 accel, 1 gyro) from axis j onto each other axis i: the
+/// cross-spectrum excess over the auto-spectrum, in the bins of j's motion band where j's motion
+/// dominates i's own (ensemble mean), so that i's motion does not leak into the estimate.
+/// Writes coupling[3 i + j]; true if any is significant.
+bool motionCoupling(const FitContext& context, int s, int j, Vec* coupling_out)
+{
+  const auto bins = motionBins(context.run_stats, 3 * s + j);
+  if (bins.size() < 2)
+  {
+    return false;
+  }
+  bool any = false;
+  for (int i = 0; i < 3; ++i)
+  {
+    if (i == j)
+    {
+      continue;
+    }
+    std::vector<std::size_t> own;
+    for (std::size_t k : bins)
+    {
+      double pjj = 0, pii = 0;
+      for (const auto& st : context.run_stats)
+      {
+        pjj += st.cross[s][k](j, j);
+        pii += st.cross[s][k](i, i);
+      }
+      if (pjj > 10.0 * pii)
+      {
+        own.push_back(k);
+      }
+    }
+    if (own.empty())
+    {
+      continue;
+    }
+    auto coupling = [&own, s, i, j](const FitStats& st) {
+      double num = 0, den = 0;
+      for (std::size_t k : own)
+      {
+        num += st.cross[s][k](i, j);
+        den += st.cross[s][k](j, j);
+      }
+      return den > 0 ? num / den : 0.0;
+    };
+    const Cmp m = context.measure(coupling);
+    if (m.significant(4.0, 1e-4))
+    {
+      (*coupling_out)[3 * i + j] = m.real - m.sim;
+      any = true;
+    }
+  }
+  return any;
+}
+
+/// misalignment: the cross-spectral excess in each axis's motion band; onto the gravity axis,
+/// the mean shift / g.
+std::optional<Fit> fitMisalignment(const FitContext& context)
+{
+  Vec acc(9, 0.0), gyr(9, 0.0);
+  bool any = false;
+  const int gravity = gravityAxis(context.run_stats);
+  for (int s = 0; s < 2; ++s)
+  {
+    for (int j = 0; j < 3; ++j)
+    {
+      const bool found = s == 0 && j == gravity ? gravityCoupling(context, j, &acc)
+                                                : motionCoupling(context, s, j, s == 0 ? &acc : &gyr);
+      any = any || found;
+    }
+  }
+  if (!any)
+  {
+    return std::nullopt;
+  }
+  addPresent(existing(context.scenario, "misalignment"), "accel", "gyro", &acc, &gyr);
+  sim::EffectSpec e{ "misalignment", true, {} };
+  e.params["accel"] = clampVec(acc, -0.5, 0.5);
+  e.params["gyro"] = clampVec(gyr, -0.5, 0.5);
+  return Fit{ { e }, "cross-spectrum excess / auto-spectrum in the motion band of each axis" };
+}
+
+/// lever_arm: the regression of accel on alpha x r + omega x (omega x r), real minus ensemble.
+std::optional<Fit> fitLeverArm(const FitContext& context)
+{
+  const FitStats& real = context.real_stats;
+  if (!real.lever_ok)
+  {
+    return std::nullopt;
+  }
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero(), sq = Eigen::Vector3d::Zero();
+  int count = 0;
+  for (const auto& s : context.run_stats)
+  {
+    if (s.lever_ok)
+    {
+      mean += s.lever;
+      sq += s.lever.cwiseProduct(s.lever);
+      ++count;
+    }
+  }
+  if (count < 2)
+  {
+    return std::nullopt;
+  }
+  mean /= count;
+  const Eigen::Vector3d sd =
+      (sq / count - mean.cwiseProduct(mean)).cwiseMax(0.0).cwiseSqrt() * std::sqrt(count / (count - 1.0));
+  Vec d(3, 0.0);
+  bool any = false;
+  for (int i = 0; i < 3; ++i)
+  {
+    if (std::abs(real.lever[i] - mean[i]) > 4.0 * sd[i] + 0.01)
+    {
+      d[i] = real.lever[i] - mean[i];
+      any = true;
+    }
+  }
+  if (!any)
+  {
+    return std::nullopt;
+  }
+  const Vec r0 = sumParam(existing(context.scenario, "lever_arm"), "offset", 3);
+  for (int i = 0; i < 3; ++i)
+  {
+    d[i] += r0[i];
+  }
+  sim::EffectSpec e{ "lever_arm", true, {} };
+  e.params["offset"] = clampVec(d, -100, 100);
+  return Fit{ { e },
+              "least squares of accel on alpha x r + omega x (omega x r) (omega from the gyro), real minus ensemble" };
+}
+
+/// periodic_bias: the strongest excess line per axis, frequency refined by least squares.
+std::optional<Fit> fitPeriodicBias(const FitContext& context)
+{
+  const std::vector<Line>& lines = context.line_search.lines;
+  Vec amp(6, 0.0), per(6, 10.0), ph(6, 0.0);
+  bool any = false;
+  for (int c = 0; c < kChannels; ++c)
+  {
+    if (lines[c].power > 0 && lines[c].freq > 0)
+    {
+      double a = 0, p = 0;
+      const double f = refineFrequency(context.real, &context.runs, c, lines[c].freq, context.real_stats.psd_fine[c].df,
+                                       context.start, &a, &p);
+      amp[c] = std::min(a, std::sqrt(2.0 * lines[c].power) * 1.5);
+      per[c] = 1.0 / f;
+      ph[c] = p;
+      any = true;
+    }
+  }
+  if (!any)
+  {
+    return std::nullopt;
+  }
+  std::vector<sim::EffectSpec> specs = existing(context.scenario, "periodic_bias");
+  sim::EffectSpec e{ "periodic_bias", true, {} };
+  e.params["accel_amplitude"] = clampVec(Vec(amp.begin(), amp.begin() + 3), 0, 100);
+  e.params["gyro_amplitude"] = clampVec(Vec(amp.begin() + 3, amp.end()), 0, 10);
+  e.params["accel_period"] = clampVec(Vec(per.begin(), per.begin() + 3), 1e-3, 1e7);
+  e.params["gyro_period"] = clampVec(Vec(per.begin() + 3, per.end()), 1e-3, 1e7);
+  e.params["accel_phase"] = Vec(ph.begin(), ph.begin() + 3);
+  e.params["gyro_phase"] = Vec(ph.begin() + 3, ph.end());
+  specs.push_back(e);
+  return Fit{ specs, "strongest excess spectral line per axis: amplitude sqrt(2 P), period 1 / f" };
+}
+
+/// Signed amplitude of a line at frequency f (PSD bin k0, width_bins wide) on every channel where
+/// it shows (6 x the ensemble's mean PSD), the sign from the phase against ref_phase.
+Vec lineAmplitudes(const FitContext& context, double f, std::size_t k0, double width_bins, double ref_phase)
+{
+  Vec amp(6, 0.0);
+  for (int c = 0; c < kChannels; ++c)
+  {
+    const Psd& psd = context.real_stats.psd_fine[c];
+    const Vec& ensemble_psd = context.line_search.mean_psd[c];
+    const auto& p = psd.power;
+    double pw = 0.0;
+    bool shows = false;
+    const std::size_t half = static_cast<std::size_t>(std::max(2.0, width_bins / 2 + 1));
+    for (std::size_t k = k0 > half ? k0 - half : 1; k <= std::min(p.size() - 1, k0 + half); ++k)
+    {
+      pw += std::max(0.0, p[k] - ensemble_psd[k]) * psd.df;
+      shows = shows || p[k] > 6.0 * ensemble_psd[k];
+    }
+    if (shows)
+    {
+      double a_c = 0, ph_c = 0;
+      sinusoidFit(context.real, c, f, context.start, &a_c, &ph_c);
+      const double sign = std::cos(ph_c - ref_phase) >= 0 ? 1.0 : -1.0;
+      amp[c] = sign * std::min(a_c, 1.5 * std::sqrt(2.0 * pw));
+    }
+  }
+  return amp;
+}
+
+/// vibration: the line with the largest excess ratio, on every axis where it shows.
+std::optional<Fit> fitVibration(const FitContext& context)
+{
+  const std::vector<Line>& lines = context.line_search.lines;
+  int best = -1;
+  for (int c = 0; c < kChannels; ++c)
+  {
+    if (lines[c].power > 0 && (best < 0 || lines[c].ratio > lines[best].ratio))
+    {
+      best = c;
+    }
+  }
+  if (best < 0)
+  {
+    return std::nullopt;
+  }
+  const Line& line = lines[best];
+  const double df = context.real_stats.psd_fine[best].df;
+  double a_ref = 0, ph_ref = 0;
+  const double f = refineFrequency(context.real, &context.runs, best, line.freq, df, context.start, &a_ref, &ph_ref);
+  const Vec amp = lineAmplitudes(context, f, line.bin, line.width_bins, ph_ref);
+  double a = 0, phase = 0;
+  sinusoidFit(context.real, best, f, context.start, &a, &phase);
+  double bw = 0.0;
+  if (line.width_bins > 6)
+  {
+    bw = (line.width_bins - 4) * df / 2.0;
+  }
+  std::vector<sim::EffectSpec> specs = existing(context.scenario, "vibration");
+  sim::EffectSpec e{ "vibration", true, {} };
+  e.params["frequency"] = { f };
+  e.params["accel_amplitude"] = clampVec(Vec(amp.begin(), amp.begin() + 3), -100, 100);
+  e.params["gyro_amplitude"] = clampVec(Vec(amp.begin() + 3, amp.end()), -10, 10);
+  e.params["phase"] = { phase };
+  e.params["bandwidth"] = { bw };
+  specs.push_back(e);
+  return Fit{ specs, "strongest excess line over all axes, amplitude per axis sqrt(2 P)" };
+}
+
+/// thermal_drift: the slope of block means against temperature, real minus ensemble.
+std::optional<Fit> fitThermalDrift(const FitContext& context)
+{
+  if (!context.temperature)
+  {
+    return std::nullopt;
+  }
+  Vec acc(3, 0.0), gyr(3, 0.0);
+  if (!channelShifts(
+          context, [](const FitStats& s, int c) { return s.temp_slope[c]; }, 1e-6, 1e-8, &acc, &gyr))
+  {
+    return std::nullopt;
+  }
+  const auto present = existing(context.scenario, "thermal_drift");
+  addPresent(present, "accel_coefficient", "gyro_coefficient", &acc, &gyr);
+  double ref = present.empty() ? 20.0 : present.front().params.at("reference_temperature")[0];
+  if (present.empty())
+  {
+    ref = context.scenario.temperature.mean;  // no information on the reference: no constant part
+  }
+  sim::EffectSpec e{ "thermal_drift", true, {} };
+  e.params["accel_coefficient"] = clampVec(acc, -1, 1);
+  e.params["gyro_coefficient"] = clampVec(gyr, -1, 1);
+  e.params["reference_temperature"] = { ref };
+  return Fit{ { e }, "slope of 32 block means against temperature, real minus ensemble" };
+}
+
+/// sample_hold: readings repeated more often than in the ensemble.
+std::optional<Fit> fitSampleHold(const FitContext& context)
+{
+  const Cmp m = context.measure([](const FitStats& s) { return s.repeated; });
+  if (!(m.real > 0.02 && m.real > 2.0 * m.sim + 0.01))
+  {
+    return std::nullopt;
+  }
+  sim::EffectSpec e{ "sample_hold", true, {} };
+  e.params["sensor_rate"] = { context.rate * (1.0 - m.real) };
+  return Fit{ { e }, "rows repeating their predecessor: sensor rate = rate x (1 - fraction)" };
+}
+
+/// saturation: flat tops the ensemble does not have.
+std::optional<Fit> fitSaturation(const FitContext& context)
+{
+  const FitStats& real = context.real_stats;
+  const auto present = existing(context.scenario, "saturation");
+  Vec lim(6, 0.0);
+  for (int c = 0; c < kChannels; ++c)
+  {
+    lim[c] = c < 3 ? 160.0 : 35.0;
+    for (const auto& e : present)
+    {
+      lim[c] = std::min(lim[c], e.params.at(c < 3 ? "accel_limit" : "gyro_limit")[c % 3]);
+    }
+  }
+  bool any = false;
+  for (int c = 0; c < kChannels; ++c)
+  {
+    const Cmp m = context.measure([c](const FitStats& s) { return s.flat[c]; });
+    if (real.flat[c] > 0 && real.limit[c] < lim[c] * 0.999 && m.real > 2.0 * m.sim + 1e-5)
+    {
+      lim[c] = real.limit[c];
+      any = true;
+    }
+  }
+  if (!any)
+  {
+    return std::nullopt;
+  }
+  sim::EffectSpec e{ "saturation", true, {} };
+  e.params["accel_limit"] = Vec(lim.begin(), lim.begin() + 3);
+  e.params["gyro_limit"] = Vec(lim.begin() + 3, lim.end());
+  return Fit{ { e }, "flat tops: limit = largest magnitude, seen repeatedly" };
+}
+
+/// quantization: a lattice the ensemble does not have.
+std::optional<Fit> fitQuantization(const FitContext& context)
+{
+  const FitStats& real = context.real_stats;
+  const auto present = existing(context.scenario, "quantization");
+  Vec step = present.empty() ? Vec(6, 0.0) : Vec{};
+  if (!present.empty())
+  {
+    const Vec& a = present.back().params.at("accel_step");
+    const Vec& g = present.back().params.at("gyro_step");
+    step = { a[0], a[1], a[2], g[0], g[1], g[2] };
+  }
+  bool any = false;
+  for (int c = 0; c < kChannels; ++c)
+  {
+    double sim_step = 0.0;
+    for (const auto& s : context.run_stats)
+    {
+      sim_step = std::max(sim_step, s.lattice[c]);
+    }
+    if (real.lattice[c] > 0 && std::abs(real.lattice[c] - sim_step) > 1e-3 * real.lattice[c])
+    {
+      step[c] = real.lattice[c];
+      any = true;
+    }
+  }
+  if (!any)
+  {
+    return std::nullopt;
+  }
+  sim::EffectSpec e{ "quantization", true, {} };
+  e.params["accel_step"] = clampVec(Vec(step.begin(), step.begin() + 3), 0, 100);
+  e.params["gyro_step"] = clampVec(Vec(step.begin() + 3, step.end()), 0, 10);
+  return Fit{ { e }, "values on a lattice: step = smallest gap between distinct values" };
+}
+
+/// gravity_leakage: the horizontal specific force in the REPORTED frame, real minus ensemble.
+std::optional<Fit> fitGravityLeakage(const FitContext& context)
+{
+  const FitStats& real = context.real_stats;
+  if (!(real.has_leak && context.run_stats[0].has_leak))
+  {
+    return std::nullopt;
+  }
+  const Cmp east = context.measure([](const FitStats& s) { return s.leak_e; });
+  const Cmp north = context.measure([](const FitStats& s) { return s.leak_n; });
+  const Cmp yaw = context.measure([](const FitStats& s) { return s.yaw; });
+  const bool sig_tilt = east.significant(4.0, 2e-4) || north.significant(4.0, 2e-4);
+  const double dyaw = wrapAngle(yaw.real - yaw.sim);
+  const bool sig_yaw = std::abs(dyaw) > 4.0 * yaw.spread + 2e-4;
+  if (!(sig_tilt || sig_yaw))
+  {
+    return std::nullopt;
+  }
+  const double de = east.real - east.sim, dn = north.real - north.sim;
+  const double c = std::cos(real.yaw), s = std::sin(real.yaw);
+  const double bx = c * de + s * dn;   // body x (forward) component of the leak
+  const double by = -s * de + c * dn;  // body y (left)
+  const auto present = existing(context.scenario, "gravity_leakage");
+  const Vec r0 = sumParam(present, "roll", 1), p0 = sumParam(present, "pitch", 1), y0 = sumParam(present, "yaw", 1);
+  sim::EffectSpec spec{ "gravity_leakage", true, {} };
+  spec.params["roll"] = { std::max(-1.5, std::min(1.5, r0[0] + (sig_tilt ? -by : 0.0))) };
+  spec.params["pitch"] = { std::max(-1.5, std::min(1.5, p0[0] + (sig_tilt ? bx : 0.0))) };
+  spec.params["yaw"] = { std::max(-3.2, std::min(3.2, y0[0] + (sig_yaw ? dyaw : 0.0))) };
+  return Fit{ { spec }, "mean specific force rotated by the reported orientation: horizontal part / g = tilt error" };
+}
+
+/// timestamp_jitter: the robust std of the stamps about a straight line in the sample index.
+std::optional<Fit> fitTimestampJitter(const FitContext& context)
+{
+  const Cmp jitter = context.measure([](const FitStats& s) { return s.stamps.jitter; });
+  if (!(jitter.real > 3.0 * jitter.sim + 4.0 * jitter.spread + 1e-7))
+  {
+    return std::nullopt;
+  }
+  const auto present = existing(context.scenario, "timestamp_jitter");
+  const double off = present.empty() ? 0.0 : present.back().params.at("offset")[0];
+  sim::EffectSpec e{ "timestamp_jitter", true, {} };
+  e.params["sigma"] = { std::min(1.0, jitter.real) };
+  e.params["offset"] = { off };
+  return Fit{ { e }, "robust std of stamps about a straight line in the sample index" };
+}
+
+/// dropouts: gaps in the stamps.
+std::optional<Fit> fitDropouts(const FitContext& context)
+{
+  const StampStats& stamps = context.real_stats.stamps;
+  const Cmp lost = context.measure([](const FitStats& s) { return s.stamps.lost_fraction; });
+  if (!(lost.real > 2.0 * lost.sim + 4.0 * lost.spread + 1e-4 && stamps.bursts > 0))
+  {
+    return std::nullopt;
+  }
+  const double kept = static_cast<double>(context.real.size());
+  sim::EffectSpec e{ "dropouts", true, {} };
+  e.params["probability"] = { std::min(1.0, stamps.bursts / kept) };
+  e.params["burst_length"] = { std::max(1.0, stamps.mean_burst) };
+  return Fit{ { e }, "gaps in the stamps: bursts per kept sample, mean missing per gap" };
+}
+
+/// A fitter per effect of the simulator's vocabulary, in the order of the candidates.
+struct Fitter
+{
+  const char* effect;
+  std::optional<Fit> (*fit)(const FitContext&);
+};
+
+const Fitter kFitters[] = {
+  { "constant_bias", fitConstantBias },
+  { "white_noise", fitWhiteNoise },
+  { "bias_random_walk", fitBiasRandomWalk },
+  { "bias_instability", fitBiasInstability },
+  { "scale_factor", fitScaleFactor },
+  { "misalignment", fitMisalignment },
+  { "lever_arm", fitLeverArm },
+  { "periodic_bias", fitPeriodicBias },
+  { "vibration", fitVibration },
+  { "thermal_drift", fitThermalDrift },
+  { "sample_hold", fitSampleHold },
+  { "saturation", fitSaturation },
+  { "quantization", fitQuantization },
+  { "gravity_leakage", fitGravityLeakage },
+  { "timestamp_jitter", fitTimestampJitter },
+  { "dropouts", fitDropouts },
+};
 }  // namespace
 
 std::vector<Candidate> fitCandidates(const Recording& real_fit, const std::vector<Recording>& sims_fit,
@@ -574,736 +1476,34 @@ std::vector<Candidate> fitCandidates(const Recording& real_fit, const std::vecto
   {
     return out;
   }
-  const double rate = scenario.rate;
   std::size_t n = real_fit.size();
   for (const auto& s : sims_fit)
   {
     n = std::min(n, s.size());
   }
+  const bool temperature = scenario.temperature.enabled && real_fit.has_temperature;
+  const double start = real_fit.stamp.front();  // elapsed 0 of the matched scenario
+  FitContext context{ real_fit, sims_fit, scenario, scenario.rate, n, temperature, start, {}, {}, {}, {} };
   const int nseg = welchSegment(n);
   std::vector<int> allan_m;
   for (int m = 1; static_cast<std::size_t>(m) * 10 <= n; m *= 2)
   {
     allan_m.push_back(m);
   }
-  const bool temp = scenario.temperature.enabled && real_fit.has_temperature;
-  const FitStats R = fitStats(real_fit, rate, nseg, allan_m, temp);
-  std::vector<FitStats> S(sims_fit.size());
+  context.real_stats = fitStats(real_fit, context.rate, nseg, allan_m, temperature);
+  context.run_stats.resize(sims_fit.size());
   parallelFor(static_cast<int>(sims_fit.size()), 2,
-              [&](int i) { S[i] = fitStats(sims_fit[i], rate, nseg, allan_m, temp); });
-  const double t0 = real_fit.stamp.front();  // elapsed 0 of the matched scenario
-
-  // constant_bias
-  {
-    Vec acc(3, 0.0), gyr(3, 0.0);
-    bool any = false;
-    for (int c = 0; c < kChannels; ++c)
-    {
-      const Cmp m = compare(R, S, [c](const FitStats& s) { return s.mean[c]; });
-      if (m.significant(4.0, c < 3 ? 1e-5 : 1e-7))
-      {
-        (c < 3 ? acc[c] : gyr[c - 3]) = m.real - m.sim;
-        any = true;
-      }
-    }
-    if (any)
-    {
-      const auto ex = existing(scenario, "constant_bias");
-      Vec a0 = sumParam(ex, "accel", 3), g0 = sumParam(ex, "gyro", 3);
-      sim::EffectSpec e{ "constant_bias", true, {} };
-      for (int i = 0; i < 3; ++i)
-      {
-        a0[i] += acc[i];
-        g0[i] += gyr[i];
-      }
-      e.params["accel"] = clampVec(a0, -100, 100);
-      e.params["gyro"] = clampVec(g0, -10, 10);
-      out.push_back(make("constant_bias", { e }, "mean of real minus mean of the ensemble, per axis"));
-    }
-  }
-
-  // white_noise: PSD floor in the upper half of the band
-  {
-    Vec acc(3, 0.0), gyr(3, 0.0);
-    bool any = false;
-    const auto ex = existing(scenario, "white_noise");
-    const Vec a2 = sumSquares(ex, "accel_density"), g2 = sumSquares(ex, "gyro_density");
-    for (int c = 0; c < kChannels; ++c)
-    {
-      auto floorOf = [c](const FitStats& s) {
-        const auto& p = s.psd[c].power;
-        Vec v(p.begin() + p.size() / 2, p.end() - p.size() / 20);
-        return medianOf(v);
-      };
-      const Cmp m = compare(R, S, floorOf);
-      const double base = c < 3 ? a2[c] : g2[c - 3];
-      double d2 = base + (m.real - m.sim) / 2.0;
-      if (m.significant(4.0) && std::abs(m.real - m.sim) > 0.1 * m.sim)
-      {
-        any = true;
-      }
-      d2 = std::max(0.0, d2);
-      (c < 3 ? acc[c] : gyr[c - 3]) = std::sqrt(d2);
-    }
-    if (any)
-    {
-      sim::EffectSpec e{ "white_noise", true, {} };
-      e.params["accel_density"] = clampVec(acc, 0, 10);
-      e.params["gyro_density"] = clampVec(gyr, 0, 10);
-      out.push_back(make("white_noise", { e }, "PSD floor (upper half band): density^2 += (P_real - P_sim) / 2"));
-    }
-  }
-
-  // bias_random_walk and bias_instability: Allan variance excess. Short taus from the samples;
-  // long taus from 32 block means of (recording - ensemble mean of the other runs), which takes a
-  // motion common to the runs out of the long-tau Allan variance.
+              [&](int i) { context.run_stats[i] = fitStats(sims_fit[i], context.rate, nseg, allan_m, temperature); });
   if (!allan_m.empty())
   {
-    const int blocks = 32;
-    const std::size_t blen = n / blocks;
-    const double tb = blen / rate;
-    auto blockMeans = [&](const Recording& r) {
-      Eigen::MatrixXd bm(blocks, kChannels);
-      for (int k = 0; k < blocks; ++k)
-      {
-        bm.row(k) = r.data.middleRows(k * blen, blen).colwise().mean();
-      }
-      return bm;
-    };
-    const int M = static_cast<int>(sims_fit.size());
-    std::vector<Eigen::MatrixXd> sb(M);
-    Eigen::MatrixXd sum = Eigen::MatrixXd::Zero(blocks, kChannels);
-    for (int j = 0; j < M; ++j)
-    {
-      sb[j] = blockMeans(sims_fit[j]);
-      sum += sb[j];
-    }
-    const Eigen::MatrixXd rb = blockMeans(real_fit) - sum / M;
-    const std::vector<int> bm_m = { 1, 2, 4, 8 };
-    std::vector<Vec> tau(kChannels), diff(kChannels), simv(kChannels), sims_sd(kChannels);
-    for (int c = 0; c < kChannels; ++c)
-    {
-      for (std::size_t k = 0; k < allan_m.size(); ++k)
-      {
-        const double t = allan_m[k] / rate;
-        if (t >= tb)
-        {
-          break;
-        }
-        const Cmp m = compare(R, S, [c, k](const FitStats& st) { return st.avar[c][k]; });
-        tau[c].push_back(t);
-        diff[c].push_back(m.real - m.sim);
-        simv[c].push_back(std::max(m.sim, 1e-300));
-        sims_sd[c].push_back(m.spread);
-      }
-      const Eigen::VectorXd rr = rb.col(c);
-      const Vec ar = allanDeviation(rr, bm_m);
-      std::vector<Vec> an(bm_m.size());
-      for (int j = 0; j < M; ++j)
-      {
-        const Eigen::VectorXd dj = sb[j].col(c) - (sum.col(c) - sb[j].col(c)) / std::max(1, M - 1);
-        const Vec a = allanDeviation(dj, bm_m);
-        for (std::size_t k = 0; k < bm_m.size(); ++k)
-        {
-          an[k].push_back(std::isfinite(a[k]) ? a[k] * a[k] : 0.0);
-        }
-      }
-      for (std::size_t k = 0; k < bm_m.size(); ++k)
-      {
-        if (!std::isfinite(ar[k]))
-        {
-          continue;
-        }
-        // (M - 1) / M: a leave-one-out residual carries more of the others' noise than the real one
-        const double null = meanOf(an[k]) * (M - 1.0) / M;
-        tau[c].push_back(bm_m[k] * tb);
-        diff[c].push_back(ar[k] * ar[k] - null);
-        simv[c].push_back(std::max(null, 1e-300));
-        sims_sd[c].push_back(stdOf(an[k]));
-      }
-    }
-    const std::size_t nt_dummy = 0;
-    (void)nt_dummy;
-    // random walk from the longest 3 taus
-    {
-      Vec acc(3, 0.0), gyr(3, 0.0);
-      bool any = false;
-      for (int c = 0; c < kChannels; ++c)
-      {
-        Vec k2;
-        bool sig = false;
-        const std::size_t nt = tau[c].size();
-        for (std::size_t k = nt >= 3 ? nt - 3 : 0; k < nt; ++k)
-        {
-          const double tau_k = tau[c][k];
-          if (diff[c][k] > 0)
-          {
-            k2.push_back(3.0 * diff[c][k] / tau_k);
-          }
-          sig = sig || (diff[c][k] > 4.0 * sims_sd[c][k] && diff[c][k] > 0.05 * simv[c][k]);
-        }
-        if (sig && !k2.empty())
-        {
-          (c < 3 ? acc[c] : gyr[c - 3]) = std::sqrt(medianOf(k2));
-          any = true;
-        }
-      }
-      if (any)
-      {
-        const auto ex = existing(scenario, "bias_random_walk");
-        const Vec a2 = sumSquares(ex, "accel_density"), g2 = sumSquares(ex, "gyro_density");
-        for (int i = 0; i < 3; ++i)
-        {
-          acc[i] = std::sqrt(acc[i] * acc[i] + a2[i]);
-          gyr[i] = std::sqrt(gyr[i] * gyr[i] + g2[i]);
-        }
-        sim::EffectSpec e{ "bias_random_walk", true, {} };
-        e.params["accel_density"] = clampVec(acc, 0, 10);
-        e.params["gyro_density"] = clampVec(gyr, 0, 10);
-        out.push_back(make("bias_random_walk", { e }, "Allan variance excess at the 3 longest taus = K^2 tau / 3"));
-      }
-    }
-    // Gauss-Markov: grid over correlation times, sigma^2 by weighted least squares
-    {
-      std::vector<bool> sig(kChannels, false);
-      bool any = false;
-      for (int c = 0; c < kChannels; ++c)
-      {
-        for (std::size_t k = 0; k < tau[c].size(); ++k)
-        {
-          if (diff[c][k] > 4.0 * sims_sd[c][k] && diff[c][k] > 0.05 * simv[c][k])
-          {
-            sig[c] = true;
-          }
-        }
-        any = any || sig[c];
-      }
-      if (any)
-      {
-        double best_cost = std::numeric_limits<double>::infinity();
-        double best_tc = 0;
-        Vec best_sigma(kChannels, 0.0);
-        const double span = n / rate;
-        for (double tc = 2.0 / rate; tc <= 2.0 * span; tc *= std::sqrt(2.0))
-        {
-          double cost = 0.0;
-          Vec sigma(kChannels, 0.0);
-          for (int c = 0; c < kChannels; ++c)
-          {
-            if (!sig[c])
-            {
-              continue;
-            }
-            double num = 0, den = 0;
-            for (std::size_t k = 0; k < tau[c].size(); ++k)
-            {
-              const double g = gaussMarkovAllanVariance(tau[c][k], tc);
-              const double w = 1.0 / (simv[c][k] + std::max(diff[c][k], 0.0));
-              num += diff[c][k] * g * w * w;
-              den += g * g * w * w;
-            }
-            const double s2 = den > 0 ? std::max(0.0, num / den) : 0.0;
-            for (std::size_t k = 0; k < tau[c].size(); ++k)
-            {
-              const double g = gaussMarkovAllanVariance(tau[c][k], tc);
-              const double w = 1.0 / (simv[c][k] + std::max(diff[c][k], 0.0));
-              cost += std::pow((diff[c][k] - s2 * g) * w, 2);
-            }
-            sigma[c] = std::sqrt(s2);
-          }
-          if (cost < best_cost)
-          {
-            best_cost = cost;
-            best_tc = tc;
-            best_sigma = sigma;
-          }
-        }
-        if (best_tc > 0 && anyNonZero(best_sigma))
-        {
-          std::vector<sim::EffectSpec> specs = existing(scenario, "bias_instability");
-          sim::EffectSpec e{ "bias_instability", true, {} };
-          e.params["accel_sigma"] = clampVec(Vec(best_sigma.begin(), best_sigma.begin() + 3), 0, 100);
-          e.params["gyro_sigma"] = clampVec(Vec(best_sigma.begin() + 3, best_sigma.end()), 0, 10);
-          e.params["correlation_time"] = { std::max(1e-3, best_tc) };
-          specs.push_back(e);
-          out.push_back(make("bias_instability", specs, "Allan variance excess fitted by a Gauss-Markov curve (grid over correlation time)"));
-        }
-      }
-    }
+    context.allan = allanExcess(context, allan_m);
   }
-
-  // scale_factor: motion-band power ratio
+  context.line_search = lineSearch(context);
+  for (const Fitter& fitter : kFitters)
   {
-    Vec acc(3, 0.0), gyr(3, 0.0);
-    bool any = false;
-    for (int c = 0; c < kChannels; ++c)
+    if (std::optional<Fit> fit = fitter.fit(context))
     {
-      const Cmp mm = compare(R, S, [c](const FitStats& s) { return s.mean[c]; });
-      if (c < 3 && std::abs(mm.sim) > 1.0)
-      {
-        // an axis carrying gravity: its mean scales (indistinguishable from a bias on this axis)
-        if (mm.significant(4.0, 1e-5))
-        {
-          acc[c] = mm.real / mm.sim - 1.0;
-          any = true;
-        }
-        continue;
-      }
-      const auto bins = motionBins(S, c);
-      if (bins.size() < 2)
-      {
-        continue;
-      }
-      auto power = [&bins, c](const FitStats& s) {
-        double p = 0.0;
-        for (std::size_t k : bins)
-        {
-          p += s.psd[c].power[k];
-        }
-        return std::sqrt(p);
-      };
-      const Cmp m = compare(R, S, power);
-      if (m.sim > 0 && m.significant(4.0) && std::abs(m.real / m.sim - 1.0) > 0.002)
-      {
-        (c < 3 ? acc[c] : gyr[c - 3]) = m.real / m.sim - 1.0;
-        any = true;
-      }
-    }
-    if (any)
-    {
-      const auto ex = existing(scenario, "scale_factor");
-      Vec a0(3, 1.0), g0(3, 1.0);
-      for (const auto& e : ex)
-      {
-        for (int i = 0; i < 3; ++i)
-        {
-          a0[i] *= 1.0 + e.params.at("accel")[i];
-          g0[i] *= 1.0 + e.params.at("gyro")[i];
-        }
-      }
-      for (int i = 0; i < 3; ++i)
-      {
-        acc[i] = a0[i] * (1.0 + acc[i]) - 1.0;
-        gyr[i] = g0[i] * (1.0 + gyr[i]) - 1.0;
-      }
-      sim::EffectSpec e{ "scale_factor", true, {} };
-      e.params["accel"] = clampVec(acc, -0.5, 0.5);
-      e.params["gyro"] = clampVec(gyr, -0.5, 0.5);
-      out.push_back(make("scale_factor", { e }, "sqrt of motion-band power ratio real / ensemble"));
-    }
-  }
-
-  // misalignment: cross-spectral excess in each axis's motion band
-  {
-    Vec acc(9, 0.0), gyr(9, 0.0);
-    bool any = false;
-    // gravity axis: the mean of the others moves by M_ij g
-    int jg = -1;
-    for (int j = 0; j < 3; ++j)
-    {
-      if (std::abs(meanOf([&]() { Vec v; for (const auto& st : S) v.push_back(st.mean[j]); return v; }())) > 1.0 &&
-          (jg < 0 || std::abs(S[0].mean[j]) > std::abs(S[0].mean[jg])))
-      {
-        jg = j;
-      }
-    }
-    for (int s = 0; s < 2; ++s)
-    {
-      for (int j = 0; j < 3; ++j)
-      {
-        if (s == 0 && j == jg)
-        {
-          for (int i = 0; i < 3; ++i)
-          {
-            if (i == j)
-            {
-              continue;
-            }
-            const Cmp mi = compare(R, S, [i](const FitStats& st) { return st.mean[i]; });
-            const Cmp mj = compare(R, S, [j](const FitStats& st) { return st.mean[j]; });
-            if (mi.significant(4.0, 1e-5))
-            {
-              acc[3 * i + j] = (mi.real - mi.sim) / mj.sim;
-              any = true;
-            }
-          }
-          continue;
-        }
-        const auto bins = motionBins(S, 3 * s + j);
-        if (bins.size() < 2)
-        {
-          continue;
-        }
-        for (int i = 0; i < 3; ++i)
-        {
-          if (i == j)
-          {
-            continue;
-          }
-          // only where axis j's motion dominates axis i's own (ensemble mean), so that i's motion
-          // does not leak into the estimate
-          std::vector<std::size_t> own;
-          for (std::size_t k : bins)
-          {
-            double pjj = 0, pii = 0;
-            for (const auto& st : S)
-            {
-              pjj += st.cross[s][k](j, j);
-              pii += st.cross[s][k](i, i);
-            }
-            if (pjj > 10.0 * pii)
-            {
-              own.push_back(k);
-            }
-          }
-          if (own.empty())
-          {
-            continue;
-          }
-          auto coupling = [&own, s, i, j](const FitStats& st) {
-            double num = 0, den = 0;
-            for (std::size_t k : own)
-            {
-              num += st.cross[s][k](i, j);
-              den += st.cross[s][k](j, j);
-            }
-            return den > 0 ? num / den : 0.0;
-          };
-          const Cmp m = compare(R, S, coupling);
-          if (m.significant(4.0, 1e-4))
-          {
-            (s == 0 ? acc : gyr)[3 * i + j] = m.real - m.sim;
-            any = true;
-          }
-        }
-      }
-    }
-    if (any)
-    {
-      const auto ex = existing(scenario, "misalignment");
-      const Vec a0 = sumParam(ex, "accel", 9), g0 = sumParam(ex, "gyro", 9);
-      for (int i = 0; i < 9; ++i)
-      {
-        acc[i] += a0[i];
-        gyr[i] += g0[i];
-      }
-      sim::EffectSpec e{ "misalignment", true, {} };
-      e.params["accel"] = clampVec(acc, -0.5, 0.5);
-      e.params["gyro"] = clampVec(gyr, -0.5, 0.5);
-      out.push_back(make("misalignment", { e }, "cross-spectrum excess / auto-spectrum in the motion band of each axis"));
-    }
-  }
-
-  // lever_arm: regression of accel on alpha x r + omega x (omega x r), real minus ensemble
-  if (R.lever_ok)
-  {
-    Eigen::Vector3d mean = Eigen::Vector3d::Zero(), sq = Eigen::Vector3d::Zero();
-    int count = 0;
-    for (const auto& s : S)
-    {
-      if (s.lever_ok)
-      {
-        mean += s.lever;
-        sq += s.lever.cwiseProduct(s.lever);
-        ++count;
-      }
-    }
-    if (count >= 2)
-    {
-      mean /= count;
-      const Eigen::Vector3d sd = (sq / count - mean.cwiseProduct(mean)).cwiseMax(0.0).cwiseSqrt() *
-                                 std::sqrt(count / (count - 1.0));
-      Vec d(3, 0.0);
-      bool any = false;
-      for (int i = 0; i < 3; ++i)
-      {
-        if (std::abs(R.lever[i] - mean[i]) > 4.0 * sd[i] + 0.01)
-        {
-          d[i] = R.lever[i] - mean[i];
-          any = true;
-        }
-      }
-      if (any)
-      {
-        const Vec r0 = sumParam(existing(scenario, "lever_arm"), "offset", 3);
-        for (int i = 0; i < 3; ++i)
-        {
-          d[i] += r0[i];
-        }
-        sim::EffectSpec e{ "lever_arm", true, {} };
-        e.params["offset"] = clampVec(d, -100, 100);
-        out.push_back(make("lever_arm", { e }, "least squares of accel on alpha x r + omega x (omega x r) (omega from the gyro), real minus ensemble"));
-      }
-    }
-  }
-
-  // periodic_bias (one line per axis) and vibration (one line on all axes): excess lines
-  {
-    std::vector<Line> lines(kChannels);
-    std::vector<Vec> simp(kChannels);
-    for (int c = 0; c < kChannels; ++c)
-    {
-      simp[c] = meanPsd(S, c);
-      // The ensemble's own line spread: require a clear excess over its largest member.
-      Vec maxp = simp[c];
-      for (const auto& s : S)
-      {
-        for (std::size_t k = 0; k < maxp.size(); ++k)
-        {
-          maxp[k] = std::max(maxp[k], s.psd_fine[c].power[k]);
-        }
-      }
-      lines[c] = strongestLine(R.psd_fine[c], maxp, 6.0);
-      if (lines[c].power > 0)
-      {
-        lines[c] = strongestLine(R.psd_fine[c], simp[c], 6.0);
-      }
-    }
-    // periodic_bias
-    {
-      Vec amp(6, 0.0), per(6, 10.0), ph(6, 0.0);
-      bool any = false;
-      for (int c = 0; c < kChannels; ++c)
-      {
-        if (lines[c].power > 0 && lines[c].freq > 0)
-        {
-          double a = 0, p = 0;
-          const double f = refineFrequency(real_fit, &sims_fit, c, lines[c].freq, R.psd_fine[c].df, t0, &a, &p);
-          amp[c] = std::min(a, std::sqrt(2.0 * lines[c].power) * 1.5);
-          per[c] = 1.0 / f;
-          ph[c] = p;
-          any = true;
-        }
-      }
-      if (any)
-      {
-        std::vector<sim::EffectSpec> specs = existing(scenario, "periodic_bias");
-        sim::EffectSpec e{ "periodic_bias", true, {} };
-        e.params["accel_amplitude"] = clampVec(Vec(amp.begin(), amp.begin() + 3), 0, 100);
-        e.params["gyro_amplitude"] = clampVec(Vec(amp.begin() + 3, amp.end()), 0, 10);
-        e.params["accel_period"] = clampVec(Vec(per.begin(), per.begin() + 3), 1e-3, 1e7);
-        e.params["gyro_period"] = clampVec(Vec(per.begin() + 3, per.end()), 1e-3, 1e7);
-        e.params["accel_phase"] = Vec(ph.begin(), ph.begin() + 3);
-        e.params["gyro_phase"] = Vec(ph.begin() + 3, ph.end());
-        specs.push_back(e);
-        out.push_back(make("periodic_bias", specs, "strongest excess spectral line per axis: amplitude sqrt(2 P), period 1 / f"));
-      }
-    }
-    // vibration: the line with the largest excess ratio, on every axis where it shows
-    {
-      int cbest = -1;
-      for (int c = 0; c < kChannels; ++c)
-      {
-        if (lines[c].power > 0 && (cbest < 0 || lines[c].ratio > lines[cbest].ratio))
-        {
-          cbest = c;
-        }
-      }
-      if (cbest >= 0)
-      {
-        double a_ref = 0, ph_ref = 0;
-        const double f = refineFrequency(real_fit, &sims_fit, cbest, lines[cbest].freq, R.psd_fine[cbest].df, t0, &a_ref, &ph_ref);
-        const std::size_t k0 = lines[cbest].bin;
-        Vec amp(6, 0.0);
-        for (int c = 0; c < kChannels; ++c)
-        {
-          const auto& p = R.psd_fine[c].power;
-          double pw = 0.0;
-          bool shows = false;
-          const std::size_t half = static_cast<std::size_t>(std::max(2.0, lines[cbest].width_bins / 2 + 1));
-          for (std::size_t k = k0 > half ? k0 - half : 1; k <= std::min(p.size() - 1, k0 + half); ++k)
-          {
-            pw += std::max(0.0, p[k] - simp[c][k]) * R.psd_fine[c].df;
-            shows = shows || p[k] > 6.0 * simp[c][k];
-          }
-          if (shows)
-          {
-            double a_c = 0, ph_c = 0;
-            sinusoidFit(real_fit, c, f, t0, &a_c, &ph_c);
-            const double sign = std::cos(ph_c - ph_ref) >= 0 ? 1.0 : -1.0;
-            amp[c] = sign * std::min(a_c, 1.5 * std::sqrt(2.0 * pw));
-          }
-        }
-        double a = 0, phase = 0;
-        sinusoidFit(real_fit, cbest, f, t0, &a, &phase);
-        double bw = 0.0;
-        if (lines[cbest].width_bins > 6)
-        {
-          bw = (lines[cbest].width_bins - 4) * R.psd_fine[cbest].df / 2.0;
-        }
-        std::vector<sim::EffectSpec> specs = existing(scenario, "vibration");
-        sim::EffectSpec e{ "vibration", true, {} };
-        e.params["frequency"] = { f };
-        e.params["accel_amplitude"] = clampVec(Vec(amp.begin(), amp.begin() + 3), -100, 100);
-        e.params["gyro_amplitude"] = clampVec(Vec(amp.begin() + 3, amp.end()), -10, 10);
-        e.params["phase"] = { phase };
-        e.params["bandwidth"] = { bw };
-        specs.push_back(e);
-        out.push_back(make("vibration", specs, "strongest excess line over all axes, amplitude per axis sqrt(2 P)"));
-      }
-    }
-  }
-
-  // thermal_drift: slope of block means against temperature, real minus ensemble
-  if (temp)
-  {
-    Vec acc(3, 0.0), gyr(3, 0.0);
-    bool any = false;
-    for (int c = 0; c < kChannels; ++c)
-    {
-      const Cmp m = compare(R, S, [c](const FitStats& s) { return s.temp_slope[c]; });
-      if (m.significant(4.0, c < 3 ? 1e-6 : 1e-8))
-      {
-        (c < 3 ? acc[c] : gyr[c - 3]) = m.real - m.sim;
-        any = true;
-      }
-    }
-    if (any)
-    {
-      const auto ex = existing(scenario, "thermal_drift");
-      const Vec a0 = sumParam(ex, "accel_coefficient", 3), g0 = sumParam(ex, "gyro_coefficient", 3);
-      double ref = ex.empty() ? 20.0 : ex.front().params.at("reference_temperature")[0];
-      if (ex.empty())
-      {
-        ref = scenario.temperature.mean;  // no information on the reference: no constant part
-      }
-      for (int i = 0; i < 3; ++i)
-      {
-        acc[i] += a0[i];
-        gyr[i] += g0[i];
-      }
-      sim::EffectSpec e{ "thermal_drift", true, {} };
-      e.params["accel_coefficient"] = clampVec(acc, -1, 1);
-      e.params["gyro_coefficient"] = clampVec(gyr, -1, 1);
-      e.params["reference_temperature"] = { ref };
-      out.push_back(make("thermal_drift", { e }, "slope of 32 block means against temperature, real minus ensemble"));
-    }
-  }
-
-  // sample_hold: readings repeated more often than in the ensemble
-  {
-    const Cmp m = compare(R, S, [](const FitStats& s) { return s.repeated; });
-    if (m.real > 0.02 && m.real > 2.0 * m.sim + 0.01)
-    {
-      sim::EffectSpec e{ "sample_hold", true, {} };
-      e.params["sensor_rate"] = { rate * (1.0 - m.real) };
-      out.push_back(make("sample_hold", { e }, "rows repeating their predecessor: sensor rate = rate x (1 - fraction)"));
-    }
-  }
-
-  // saturation: flat tops the ensemble does not have
-  {
-    const auto ex = existing(scenario, "saturation");
-    Vec lim(6, 0.0);
-    for (int c = 0; c < kChannels; ++c)
-    {
-      lim[c] = c < 3 ? 160.0 : 35.0;
-      for (const auto& e : ex)
-      {
-        lim[c] = std::min(lim[c], e.params.at(c < 3 ? "accel_limit" : "gyro_limit")[c % 3]);
-      }
-    }
-    bool any = false;
-    for (int c = 0; c < kChannels; ++c)
-    {
-      const Cmp m = compare(R, S, [c](const FitStats& s) { return s.flat[c]; });
-      if (R.flat[c] > 0 && R.limit[c] < lim[c] * 0.999 && m.real > 2.0 * m.sim + 1e-5)
-      {
-        lim[c] = R.limit[c];
-        any = true;
-      }
-    }
-    if (any)
-    {
-      sim::EffectSpec e{ "saturation", true, {} };
-      e.params["accel_limit"] = Vec(lim.begin(), lim.begin() + 3);
-      e.params["gyro_limit"] = Vec(lim.begin() + 3, lim.end());
-      out.push_back(make("saturation", { e }, "flat tops: limit = largest magnitude, seen repeatedly"));
-    }
-  }
-
-  // quantization: a lattice the ensemble does not have
-  {
-    const auto ex = existing(scenario, "quantization");
-    Vec step = ex.empty() ? Vec(6, 0.0) : Vec{};
-    if (!ex.empty())
-    {
-      const Vec& a = ex.back().params.at("accel_step");
-      const Vec& g = ex.back().params.at("gyro_step");
-      step = { a[0], a[1], a[2], g[0], g[1], g[2] };
-    }
-    bool any = false;
-    for (int c = 0; c < kChannels; ++c)
-    {
-      double sim_step = 0.0;
-      for (const auto& s : S)
-      {
-        sim_step = std::max(sim_step, s.lattice[c]);
-      }
-      if (R.lattice[c] > 0 && std::abs(R.lattice[c] - sim_step) > 1e-3 * R.lattice[c])
-      {
-        step[c] = R.lattice[c];
-        any = true;
-      }
-    }
-    if (any)
-    {
-      sim::EffectSpec e{ "quantization", true, {} };
-      e.params["accel_step"] = clampVec(Vec(step.begin(), step.begin() + 3), 0, 100);
-      e.params["gyro_step"] = clampVec(Vec(step.begin() + 3, step.end()), 0, 10);
-      out.push_back(make("quantization", { e }, "values on a lattice: step = smallest gap between distinct values"));
-    }
-  }
-
-  // gravity_leakage: horizontal specific force in the REPORTED frame, real minus ensemble
-  if (R.has_leak && S[0].has_leak)
-  {
-    const Cmp e = compare(R, S, [](const FitStats& s) { return s.leak_e; });
-    const Cmp nn = compare(R, S, [](const FitStats& s) { return s.leak_n; });
-    const Cmp y = compare(R, S, [](const FitStats& s) { return s.yaw; });
-    const bool sig_tilt = e.significant(4.0, 2e-4) || nn.significant(4.0, 2e-4);
-    const double dyaw = wrapAngle(y.real - y.sim);
-    const bool sig_yaw = std::abs(dyaw) > 4.0 * y.spread + 2e-4;
-    if (sig_tilt || sig_yaw)
-    {
-      const double de = e.real - e.sim, dn = nn.real - nn.sim;
-      const double c = std::cos(R.yaw), s = std::sin(R.yaw);
-      const double bx = c * de + s * dn;   // body x (forward) component of the leak
-      const double by = -s * de + c * dn;  // body y (left)
-      const auto ex = existing(scenario, "gravity_leakage");
-      const Vec r0 = sumParam(ex, "roll", 1), p0 = sumParam(ex, "pitch", 1), y0 = sumParam(ex, "yaw", 1);
-      sim::EffectSpec spec{ "gravity_leakage", true, {} };
-      spec.params["roll"] = { std::max(-1.5, std::min(1.5, r0[0] + (sig_tilt ? -by : 0.0))) };
-      spec.params["pitch"] = { std::max(-1.5, std::min(1.5, p0[0] + (sig_tilt ? bx : 0.0))) };
-      spec.params["yaw"] = { std::max(-3.2, std::min(3.2, y0[0] + (sig_yaw ? dyaw : 0.0))) };
-      out.push_back(make("gravity_leakage", { spec }, "mean specific force rotated by the reported orientation: horizontal part / g = tilt error"));
-    }
-  }
-
-  // timestamp_jitter
-  {
-    const Cmp j = compare(R, S, [](const FitStats& s) { return s.stamps.jitter; });
-    if (j.real > 3.0 * j.sim + 4.0 * j.spread + 1e-7)
-    {
-      const auto ex = existing(scenario, "timestamp_jitter");
-      const double off = ex.empty() ? 0.0 : ex.back().params.at("offset")[0];
-      sim::EffectSpec e{ "timestamp_jitter", true, {} };
-      e.params["sigma"] = { std::min(1.0, j.real) };
-      e.params["offset"] = { off };
-      out.push_back(make("timestamp_jitter", { e }, "robust std of stamps about a straight line in the sample index"));
-    }
-  }
-
-  // dropouts
-  {
-    const Cmp l = compare(R, S, [](const FitStats& s) { return s.stamps.lost_fraction; });
-    if (l.real > 2.0 * l.sim + 4.0 * l.spread + 1e-4 && R.stamps.bursts > 0)
-    {
-      const double kept = static_cast<double>(real_fit.size());
-      sim::EffectSpec e{ "dropouts", true, {} };
-      e.params["probability"] = { std::min(1.0, R.stamps.bursts / kept) };
-      e.params["burst_length"] = { std::max(1.0, R.stamps.mean_burst) };
-      out.push_back(make("dropouts", { e }, "gaps in the stamps: bursts per kept sample, mean missing per gap"));
+      out.push_back(make(fitter.effect, std::move(fit->specs), fit->note));
     }
   }
   return out;
