@@ -36,6 +36,14 @@ constexpr double kFadeEnd = 1e-3;
 constexpr double kTurnAveraging = 2.0;
 constexpr double kTurnRate = 0.008;
 constexpr double kAfterTurn = 120.0;
+/// The longer yaw rate mean a turn is told by on a vessel that yaws in waves [s], the time over
+/// which the sea's spread of the 2 s mean about it is measured [s], and how many such spreads
+/// make a turn [-].
+constexpr double kSustainedTurnAveraging = 60.0;
+constexpr double kYawSpreadAveraging = 300.0;
+constexpr double kYawSpreads = 3.0;
+/// Time after a yaw that is no turn during which the horizontal axes keep no broadband wave [s].
+constexpr double kAfterYaw = 5.0;
 /// Heading change after which the vertical spectrum describes another sea (every encounter
 /// frequency moves) [rad], measured on the heading's moving mean of kHeadingAveraging [s]: the
 /// yaw a sea induces (degrees to tens of degrees on a buoy, at its wave periods) averages out
@@ -506,7 +514,9 @@ private:
   /// Forgets the integrated motion and period search, keeps bias, level and sample rate.
   void resetMotion()
   {
-    turn_rate_ = since_turn_ = 0.0;
+    turn_rate_ = since_turn_ = sustained_turn_rate_ = yaw_spread_ = yaw_samples_ = 0.0;
+    turn_confirmed_ = false;
+    since_start_ = 0.0;
     heading_samples_ = 0;
     for (auto& axis : axes_)
     {
@@ -645,13 +655,12 @@ private:
     const Vector3 a = levelAcceleration(s);
     {
       const double yaw_rate = (out.orientation * s.angular_rate).z();
-      turn_rate_ += (dt > 0.0 ? std::min(1.0, dt / kTurnAveraging) : 0.0) * (yaw_rate - turn_rate_);
-      since_turn_ = std::abs(turn_rate_) > kTurnRate ? 0.0 : since_turn_ + dt;
+      followHeading(out.orientation, dt);
+      followYawRate(yaw_rate, dt);
       // With one level frame the hull's roll and pitch leak g sin(angle) into the level axes in
       // the wave band: no horizontal broadband wave then.
       if (!s.has_orientation)
         since_turn_ = 0.0;
-      followHeading(out.orientation, dt);
     }
 
     // Until the window ends the bias is provisional: the running mean of the level acceleration.
@@ -794,6 +803,30 @@ private:
     }
   }
 
+  /// Yaw for the horizontal axes (after followHeading). The 2 s mean yaw rate beyond kTurnRate
+  /// and beyond kYawSpreads times the spread the sea gives it (its deviation from the
+  /// kSustainedTurnAveraging mean, over kYawSpreadAveraging) holds their broadband share off
+  /// while it lasts and kAfterYaw after; once the heading's mean has moved kRecordTurn (a turn,
+  /// not a yaw the sea induces), kAfterTurn after, as after the start. A vessel that yaws by
+  /// degrees in waves (a buoy) keeps its share; a steady turn raises the spread to about 0.2 of
+  /// its rate.
+  void followYawRate(double yaw_rate, double dt)
+  {
+    const auto weight = [dt](double time_constant) { return dt > 0.0 ? std::min(1.0, dt / time_constant) : 0.0; };
+    turn_rate_ += weight(kTurnAveraging) * (yaw_rate - turn_rate_);
+    sustained_turn_rate_ += weight(kSustainedTurnAveraging) * (yaw_rate - sustained_turn_rate_);
+    const double deviation = turn_rate_ - sustained_turn_rate_;
+    yaw_samples_ += 1.0;
+    yaw_spread_ += std::max(weight(kYawSpreadAveraging), 1.0 / yaw_samples_) * (deviation * deviation - yaw_spread_);
+    const double threshold = std::max(kTurnRate, kYawSpreads * std::sqrt(yaw_spread_));
+    since_turn_ = std::abs(turn_rate_) > threshold || heading_turned_ ? 0.0 : since_turn_ + dt;
+    since_start_ += dt;
+    if (heading_turned_)
+      turn_confirmed_ = true;
+    else if (since_turn_ >= kAfterTurn)
+      turn_confirmed_ = false;
+  }
+
   /// Follows the heading's moving mean; heading_turned_ marks the sample at which it has moved
   /// kRecordTurn from where the vertical spectrum record began (which then begins anew there).
   void followHeading(const Eigen::Quaterniond& orientation, double dt)
@@ -820,7 +853,7 @@ private:
   /// Default mode with heave_filter: the broadband wave estimate of axis i (BroadbandWave),
   /// blended into the harmonic model's wave output by its share. A horizontal axis may take a
   /// share only when the ship has not turned for kAfterTurn (a turn's centripetal acceleration
-  /// lies at the wave band's lower edge) and the sample had an attitude (with one level frame
+  /// lies at the wave band's lower edge; followYawRate) and the sample had an attitude (with one level frame
   /// the roll leaks g sin(roll) into the level axes in the wave band).
   BroadbandWaveOutput broadbandWave(AxisEstimator& axis, int i, double raw, double residual, double dt,
                                     double* wave_a, double* wave_x, double* wave_v)
@@ -833,7 +866,7 @@ private:
     in.residual = residual;
     in.harmonic_position = *wave_x;
     in.locked = axis.locked;
-    in.allowed = since_turn_ >= kAfterTurn;
+    in.allowed = since_start_ >= kAfterTurn && since_turn_ >= (turn_confirmed_ ? kAfterTurn : kAfterYaw);
     in.turning = heading_turned_;
     in.dt = dt;
     in.rate = rate_;
@@ -1048,6 +1081,11 @@ private:
   int since_analysis_ = 0;
   double now_ = 0.0;  ///< time of the sample being processed [s]
   double turn_rate_ = 0.0;     ///< level-frame yaw rate averaged over kTurnAveraging [rad/s]
+  double sustained_turn_rate_ = 0.0;  ///< averaged over kSustainedTurnAveraging [rad/s]
+  double yaw_spread_ = 0.0;    ///< mean square of turn_rate_ less sustained_turn_rate_ [rad^2/s^2]
+  double yaw_samples_ = 0.0;   ///< samples in yaw_spread_'s mean
+  bool turn_confirmed_ = false;  ///< the heading moved kRecordTurn since the share was last allowed
+  double since_start_ = 0.0;     ///< time since the motion (re)started [s]
   double since_turn_ = 0.0;    ///< time since it last exceeded kTurnRate, or since the last
                                ///< sample without an attitude [s]
   long heading_samples_ = 0;     ///< since the heading mean started
