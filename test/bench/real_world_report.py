@@ -60,6 +60,19 @@ def markdown(tests):
               '(harmonic model alone) | < 35 and < half of it | %s |'
               % (axis, ' '.join('%.1f (%.1f)' % (100 * v, 100 * w) for v, w in
                                 zip(seeds(horizontal, axis + '_error_'), seeds(horizontal, axis + '_error_harmonic_')))))
+    hull = tests.get('MooredHullWithLeverArm', {})
+    for axis, label, target in ((0, 'surge RMS error [% of true]', '<= 20 (MRU grade)'),
+                                (1, 'sway RMS error [% of true]', '<= 20 (MRU grade)'),
+                                (2, 'heave RMS error [% of Hs]', '<= 3 (MRU grade)')):
+        print('| moored hull of its own, IMU 5 m aft, 1 m to port, 4 m up, lever arm configured, 20 min, '
+              'RW 2e-4 | %s (lever arm not configured) | %s | %s |'
+              % (label, target, ' '.join('%.1f (%.1f)' % (v, w) for v, w in
+                                                zip(seeds(hull, 'lever_wave_error_%d_' % axis),
+                                                    seeds(hull, 'no_lever_wave_error_%d_' % axis)))))
+    yawing = tests.get('HullYawingInWavesKeepsSurgeAndSway', {})
+    for axis, label in ((0, 'surge'), (1, 'sway')):
+        print('| the same hull yawing 0.12 rad in the waves, IMU at the reference point | %s RMS error [%% of true] '
+              '| < 40 | %s |' % (label, ' '.join('%.1f' % v for v in seeds(yawing, 'yawing_wave_error_%d_' % axis))))
     for name, label in (('adis16405', 'ADIS16405 at rest, 10 min'), ('mpu6050_100s', 'MPU-6050 at rest, 100 s'),
                         ('mpu6050_449s', 'MPU-6050 at rest, 449 s')):
         if name + '_gyro_attitude_max_wave' not in real:
