@@ -83,7 +83,8 @@ class Bench:
         self.master = None
         self.seeds = 3 if self.quick else 10
         self.scenarios = (['paper_bench', 'moored_sea_state_4'] if self.quick else
-                          ['paper_bench', 'moored_sea_state_4', 'swell_and_wind_sea', 'underway_course_changes'])
+                          ['paper_bench', 'moored_sea_state_4', 'moored_sea_state_4_bias_wander', 'swell_and_wind_sea',
+                           'swell_and_wind_sea_bias_wander', 'underway_course_changes'])
         self.sea_duration = 600 if self.quick else 1800  # [s]: slow-motion errors at 60 s, 10 min, 30 min
         # Rates and lengths of the ROS side.
         self.paced_s = [10, 5, 5] if self.quick else [30, 20, 10]
@@ -303,9 +304,11 @@ class Bench:
         # Streams as real IMUs deliver them, made by generators of their own (not the simulator's), and
         # the real recordings at rest: test_core's RealWorldStreams tests record their figures.
         log('real-world streams (test_core RealWorldStreams*)')
+        # The hull of the test's own (a second formulation of the sea) for the scenarios' seeds and length.
         xml = os.path.join(self.tmp, 'real_world.xml')
-        r = self.output([self.exe('test_core'), '--gtest_filter=RealWorldStreams*', '--gtest_output=xml:' + xml],
-                        stderr=subprocess.STDOUT)
+        env = dict(self.env, PBC_HULL_SEEDS=str(self.seeds), PBC_HULL_DURATION=str(self.sea_duration))
+        r = subprocess.run([self.exe('test_core'), '--gtest_filter=RealWorldStreams*', '--gtest_output=xml:' + xml],
+                           env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, universal_newlines=True)
         failed = len(re.findall(r'FAILED  \]', r.stdout)) if r.returncode else 0
         return {'tests': real_world_report.properties(xml), 'failed_lines': failed}
 
