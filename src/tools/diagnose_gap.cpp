@@ -31,6 +31,7 @@
 #include <fstream>
 #include <iostream>
 #include <map>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -366,6 +367,208 @@ std::string reportMarkdown(const gap::Report& rep, const Options& o, bool plots)
   md << "\nMethod and limits: docs/gap.md of periodic_bias_compensation.\n";
   return md.str();
 }
+
+/// The options, or nothing after --help (a wrong command line throws).
+std::optional<Options> parse(int argc, char** argv)
+{
+  Options o;
+  periodic_bias_compensation::CommandLine cli(kUsage);
+  cli.text("--real", &o.real)
+      .text("--real-csv", &o.real_csv)
+      .text("--columns", &o.columns)
+      .text("--sim", &o.scenario)
+      .text("--out", &o.out)
+      .text("--imu-topic", &o.imu_topic)
+      .option("--truth-topic",
+              [&o](const std::string& topic) {
+                o.truth_topic = topic;
+                o.truth_topic_given = true;
+              })
+      .flag("--no-truth", &o.use_truth, false)
+      .number("--truth-smooth", &o.diag.truth_smooth)
+      .number("--truth-position-scale", &o.truth_position_scale)
+      .text("--temperature-topic", &o.temperature_topic)
+      .number("--accel-scale", &o.accel_scale)
+      .number("--gyro-scale", &o.gyro_scale)
+      .number("--time-scale", &o.time_scale)
+      .number("--rate", &o.rate)
+      .integer("--skip-lines", &o.skip_lines)
+      .integer("--ensemble", &o.diag.ensemble)
+      .number("--fit-fraction", &o.diag.fit_fraction)
+      .integer("--threads", &o.diag.threads)
+      .number("--max-duration", &o.max_duration)
+      .flag("--no-plots", &o.plots, false)
+      .integer("--steps", &o.steps);
+  if (!cli.parse(argc, argv))
+    return std::nullopt;
+  if ((o.real.empty() == o.real_csv.empty()) || o.scenario.empty() || o.out.empty())
+  {
+    throw UsageError("one of --real / --real-csv, and --sim and --out are required");
+  }
+  if (!o.real_csv.empty() && o.columns.empty())
+  {
+    throw UsageError("--real-csv needs --columns");
+  }
+  if (o.diag.fit_fraction <= 0.1 || o.diag.fit_fraction >= 0.9)
+  {
+    throw UsageError("--fit-fraction must be in (0.1, 0.9)");
+  }
+  periodic_bias_compensation::requireAtLeast("--ensemble", o.diag.ensemble, 1);
+  periodic_bias_compensation::requireAtLeast("--threads", o.diag.threads, 1);
+  periodic_bias_compensation::requireAtLeast("--steps", o.steps, 0);
+  periodic_bias_compensation::requireAtLeast("--skip-lines", o.skip_lines, 0);
+  std::vector<periodic_bias_compensation::NamedPath> outputs;
+  for (const char* name : kReportFiles)
+  {
+    outputs.push_back({ "--out", (fs::path(o.out) / name).string() });
+  }
+  periodic_bias_compensation::refuseOverwritingInputs(
+      { { "--real", o.real }, { "--real-csv", o.real_csv }, { "--sim", o.scenario } }, outputs);
+  return o;
+}
+
+/// One step of the stepwise diagnosis: the effect named and the figures it was named with.
+struct Step
+{
+  std::string effect, params;
+  double gap_before, shrink, confidence;
+};
+
+/// The steps taken and the model with every named effect.
+struct Stepwise
+{
+  std::vector<Step> steps;
+  sim::Scenario model;
+};
+
+/// Stepwise: adds the named effect to the model and diagnoses again, while an effect is named
+/// (at most `steps` times; rep is the first diagnosis).
+Stepwise stepwiseDiagnosis(const gap::Report& rep, const gap::Recording& real, const sim::Scenario& scenario,
+                           const Options& o)
+{
+  Stepwise result;
+  std::vector<Step>& steps = result.steps;
+  sim::Scenario& model = result.model;
+  model = scenario;
+  model.motion = rep.motion.fitted.motion;  // the motion fitted once; effects added step by step
+  const gap::Report* cur = &rep;
+  gap::Report next;
+  for (int k = 0; k < o.steps; ++k)
+  {
+    // forward selection: the verdict's effect, or failing that the best candidate if it
+    // explains at least 5 % (several effects together may explain what none does alone)
+    int pick = cur->best;
+    if (pick < 0 && cur->verdict_effect != "no_gap" && !cur->ranking.empty() && cur->ranking[0].shrink >= 0.05)
+    {
+      pick = 0;
+    }
+    if (pick < 0)
+    {
+      steps.push_back({ cur->verdict_effect, "{}", cur->gap_before, 0.0, 0.0 });
+      break;
+    }
+    const gap::Candidate& c = cur->ranking[pick];
+    steps.push_back({ c.effect, c.params_json, cur->gap_before, c.shrink, cur->confidence });
+    model = gap::applyCandidate(model, c);
+    if (k + 1 < o.steps)
+    {
+      next = gap::diagnose(real, model, o.diag);
+      cur = &next;
+    }
+  }
+  return result;
+}
+
+/// report.json: the report with its "stepwise" array before "seconds".
+std::string stepwiseJson(const gap::Report& rep, const std::vector<Step>& steps)
+{
+  std::ostringstream stepwise;
+  stepwise << "[";
+  for (std::size_t i = 0; i < steps.size(); ++i)
+  {
+    char buf[200];
+    std::snprintf(buf, sizeof(buf),
+                  "{\"step\": %zu, \"effect\": \"%s\", \"gap_before\": %.6g, \"shrink\": %.6g, \"confidence\": %.6g, "
+                  "\"params\": ",
+                  i + 1, steps[i].effect.c_str(), steps[i].gap_before, steps[i].shrink, steps[i].confidence);
+    stepwise << (i ? ",\n    " : "\n    ") << buf << steps[i].params << "}";
+  }
+  stepwise << "\n  ]";
+  std::string json = gap::reportJson(rep);
+  const auto pos = json.rfind("  \"seconds\"");
+  json.insert(pos, "  \"stepwise\": " + stepwise.str() + ",\n");
+  return json;
+}
+
+/// The plots of DIR (scripts/gap_plots.py); whether they were made.
+bool makePlots(const gap::Report& rep, const Options& o)
+{
+  const std::string script = std::string(PBC_SOURCE_DIR) + "/scripts/gap_plots.py";
+  const std::string cmd = "/usr/bin/python3 '" + script + "' --dir '" + o.out + "' --title '" +
+                          fs::path(rep.real_source).filename().string() + " vs " + rep.scenario_name + ": " +
+                          rep.verdict_effect + "' > /dev/null 2>&1";
+  const bool plots = runCommand(cmd) == 0;
+  if (!plots)
+  {
+    std::cerr << "diagnose_gap: plots not made (" << script << " with python3-matplotlib)\n";
+  }
+  return plots;
+}
+
+/// report.md's table of the steps.
+std::string stepwiseMarkdown(const std::vector<Step>& steps)
+{
+  std::ostringstream sm;
+  sm << "\n## Stepwise (each named effect added to the model, then diagnosed again)\n\n"
+     << "| step | effect named | gap before (withheld) | shrink | confidence | parameters "
+        "|\n|---|---|---|---|---|---|\n";
+  for (std::size_t i = 0; i < steps.size(); ++i)
+  {
+    char buf[160];
+    std::snprintf(buf, sizeof(buf), "| %zu | %s | %.3g | %.0f %% | %.2f | `", i + 1, steps[i].effect.c_str(),
+                  steps[i].gap_before, 100 * steps[i].shrink, steps[i].confidence);
+    sm << buf << steps[i].params << "` |\n";
+  }
+  sm << "\nThe model with every named effect: `fitted_scenario.yaml`.\n";
+  return sm.str();
+}
+
+/// The summary's line of the steps.
+std::string stepwiseLine(const std::vector<Step>& steps)
+{
+  std::ostringstream so;
+  so << "STEPWISE:";
+  for (std::size_t i = 0; i < steps.size(); ++i)
+  {
+    char buf[160];
+    std::snprintf(buf, sizeof(buf), " %s%s (gap %.3g, shrink %.0f %%)", i ? "-> " : "", steps[i].effect.c_str(),
+                  steps[i].gap_before, 100 * steps[i].shrink);
+    so << buf;
+  }
+  return so.str();
+}
+
+/// Writes the report's files to DIR (and the plots unless --no-plots).
+void writeReport(const gap::Report& rep, const Stepwise& s, const Options& o)
+{
+  const auto write = [&o](const std::string& name, const std::string& contents) {
+    periodic_bias_compensation::writeOutputFile((fs::path(o.out) / name).string(), contents);
+  };
+  write("report.json", stepwiseJson(rep, s.steps));
+  write("fitted_scenario.yaml", sim::toYaml(s.model));
+  write("psd.csv", rep.psd_csv);
+  write("allan.csv", rep.allan_csv);
+  write("drift.csv", rep.drift_csv);
+  write("features.csv", rep.features_csv);
+  if (rep.has_truth)
+  {
+    write("truth.csv", rep.truth_csv);
+  }
+  const bool plots = o.plots && makePlots(rep, o);
+  std::string md = reportMarkdown(rep, o, plots);
+  md.insert(md.find("\nMethod and limits"), stepwiseMarkdown(s.steps));
+  write("report.md", md);
+}
 }  // namespace
 
 int main(int argc, char** argv)
@@ -373,58 +576,10 @@ int main(int argc, char** argv)
   Options o;
   try
   {
-    periodic_bias_compensation::CommandLine cli(kUsage);
-    cli.text("--real", &o.real)
-        .text("--real-csv", &o.real_csv)
-        .text("--columns", &o.columns)
-        .text("--sim", &o.scenario)
-        .text("--out", &o.out)
-        .text("--imu-topic", &o.imu_topic)
-        .option("--truth-topic",
-                [&o](const std::string& topic) {
-                  o.truth_topic = topic;
-                  o.truth_topic_given = true;
-                })
-        .flag("--no-truth", &o.use_truth, false)
-        .number("--truth-smooth", &o.diag.truth_smooth)
-        .number("--truth-position-scale", &o.truth_position_scale)
-        .text("--temperature-topic", &o.temperature_topic)
-        .number("--accel-scale", &o.accel_scale)
-        .number("--gyro-scale", &o.gyro_scale)
-        .number("--time-scale", &o.time_scale)
-        .number("--rate", &o.rate)
-        .integer("--skip-lines", &o.skip_lines)
-        .integer("--ensemble", &o.diag.ensemble)
-        .number("--fit-fraction", &o.diag.fit_fraction)
-        .integer("--threads", &o.diag.threads)
-        .number("--max-duration", &o.max_duration)
-        .flag("--no-plots", &o.plots, false)
-        .integer("--steps", &o.steps);
-    if (!cli.parse(argc, argv))
+    const std::optional<Options> parsed = parse(argc, argv);
+    if (!parsed)
       return 0;
-    if ((o.real.empty() == o.real_csv.empty()) || o.scenario.empty() || o.out.empty())
-    {
-      throw UsageError("one of --real / --real-csv, and --sim and --out are required");
-    }
-    if (!o.real_csv.empty() && o.columns.empty())
-    {
-      throw UsageError("--real-csv needs --columns");
-    }
-    if (o.diag.fit_fraction <= 0.1 || o.diag.fit_fraction >= 0.9)
-    {
-      throw UsageError("--fit-fraction must be in (0.1, 0.9)");
-    }
-    periodic_bias_compensation::requireAtLeast("--ensemble", o.diag.ensemble, 1);
-    periodic_bias_compensation::requireAtLeast("--threads", o.diag.threads, 1);
-    periodic_bias_compensation::requireAtLeast("--steps", o.steps, 0);
-    periodic_bias_compensation::requireAtLeast("--skip-lines", o.skip_lines, 0);
-    std::vector<periodic_bias_compensation::NamedPath> outputs;
-    for (const char* name : kReportFiles)
-    {
-      outputs.push_back({ "--out", (fs::path(o.out) / name).string() });
-    }
-    periodic_bias_compensation::refuseOverwritingInputs(
-        { { "--real", o.real }, { "--real-csv", o.real_csv }, { "--sim", o.scenario } }, outputs);
+    o = *parsed;
   }
   catch (const std::exception& e)
   {
@@ -452,101 +607,11 @@ int main(int argc, char** argv)
   }
   try
   {
-    const auto write = [&o](const std::string& name, const std::string& contents) {
-      periodic_bias_compensation::writeOutputFile((fs::path(o.out) / name).string(), contents);
-    };
     normalise(&real, o.max_duration);
     const gap::Report rep = gap::diagnose(real, scenario, o.diag);
-    // Stepwise: add the named effect to the model and diagnose again, while an effect is named.
-    struct Step
-    {
-      std::string effect, params;
-      double gap_before, shrink, confidence;
-    };
-    std::vector<Step> steps;
-    sim::Scenario model = scenario;
-    model.motion = rep.motion.fitted.motion;  // the motion fitted once; effects added step by step
-    const gap::Report* cur = &rep;
-    gap::Report next;
-    for (int k = 0; k < o.steps; ++k)
-    {
-      // forward selection: the verdict's effect, or failing that the best candidate if it
-      // explains at least 5 % (several effects together may explain what none does alone)
-      int pick = cur->best;
-      if (pick < 0 && cur->verdict_effect != "no_gap" && !cur->ranking.empty() && cur->ranking[0].shrink >= 0.05)
-      {
-        pick = 0;
-      }
-      if (pick < 0)
-      {
-        steps.push_back({ cur->verdict_effect, "{}", cur->gap_before, 0.0, 0.0 });
-        break;
-      }
-      const gap::Candidate& c = cur->ranking[pick];
-      steps.push_back({ c.effect, c.params_json, cur->gap_before, c.shrink, cur->confidence });
-      model = gap::applyCandidate(model, c);
-      if (k + 1 < o.steps)
-      {
-        next = gap::diagnose(real, model, o.diag);
-        cur = &next;
-      }
-    }
-    std::ostringstream stepwise;
-    stepwise << "[";
-    for (std::size_t i = 0; i < steps.size(); ++i)
-    {
-      char buf[200];
-      std::snprintf(buf, sizeof(buf), "{\"step\": %zu, \"effect\": \"%s\", \"gap_before\": %.6g, \"shrink\": %.6g, \"confidence\": %.6g, \"params\": ",
-                    i + 1, steps[i].effect.c_str(), steps[i].gap_before, steps[i].shrink, steps[i].confidence);
-      stepwise << (i ? ",\n    " : "\n    ") << buf << steps[i].params << "}";
-    }
-    stepwise << "\n  ]";
-    std::string json = gap::reportJson(rep);
-    const auto pos = json.rfind("  \"seconds\"");
-    json.insert(pos, "  \"stepwise\": " + stepwise.str() + ",\n");
-    write("report.json", json);
-    write("fitted_scenario.yaml", sim::toYaml(model));
-    write("psd.csv", rep.psd_csv);
-    write("allan.csv", rep.allan_csv);
-    write("drift.csv", rep.drift_csv);
-    write("features.csv", rep.features_csv);
-    if (rep.has_truth)
-    {
-      write("truth.csv", rep.truth_csv);
-    }
-    bool plots = false;
-    if (o.plots)
-    {
-      const std::string script = std::string(PBC_SOURCE_DIR) + "/scripts/gap_plots.py";
-      const std::string cmd = "/usr/bin/python3 '" + script + "' --dir '" + o.out + "' --title '" +
-                              fs::path(rep.real_source).filename().string() + " vs " + rep.scenario_name + ": " +
-                              rep.verdict_effect + "' > /dev/null 2>&1";
-      plots = runCommand(cmd) == 0;
-      if (!plots)
-      {
-        std::cerr << "diagnose_gap: plots not made (" << script << " with python3-matplotlib)\n";
-      }
-    }
-    std::string md = reportMarkdown(rep, o, plots);
-    std::ostringstream sm;
-    sm << "\n## Stepwise (each named effect added to the model, then diagnosed again)\n\n"
-       << "| step | effect named | gap before (withheld) | shrink | confidence | parameters |\n|---|---|---|---|---|---|\n";
-    std::ostringstream so;
-    so << "STEPWISE:";
-    for (std::size_t i = 0; i < steps.size(); ++i)
-    {
-      char buf[160];
-      std::snprintf(buf, sizeof(buf), "| %zu | %s | %.3g | %.0f %% | %.2f | `", i + 1, steps[i].effect.c_str(), steps[i].gap_before,
-                    100 * steps[i].shrink, steps[i].confidence);
-      sm << buf << steps[i].params << "` |\n";
-      std::snprintf(buf, sizeof(buf), " %s%s (gap %.3g, shrink %.0f %%)", i ? "-> " : "", steps[i].effect.c_str(),
-                    steps[i].gap_before, 100 * steps[i].shrink);
-      so << buf;
-    }
-    sm << "\nThe model with every named effect: `fitted_scenario.yaml`.\n";
-    md.insert(md.find("\nMethod and limits"), sm.str());
-    write("report.md", md);
-    std::cout << gap::reportSummary(rep) << so.str() << "\nreport: " << o.out << "/report.md, " << o.out
+    const Stepwise s = stepwiseDiagnosis(rep, real, scenario, o);
+    writeReport(rep, s, o);
+    std::cout << gap::reportSummary(rep) << stepwiseLine(s.steps) << "\nreport: " << o.out << "/report.md, " << o.out
               << "/report.json, " << o.out << "/fitted_scenario.yaml\n";
   }
   catch (const std::exception& e)

@@ -508,6 +508,230 @@ std::string format(double value, const char* spec)
   std::snprintf(buffer, sizeof(buffer), spec, value);
   return buffer;
 }
+
+/// Paper Sec. 4.1: the constant bias from a recording at rest (a run of the scenario file given).
+Vector3 staticBias(const std::string& calibration_scenario)
+{
+  pbc::CompensatorConfig config;
+  config.mode = pbc::Mode::kPaper;
+  config.assume_static_calibration = true;
+  config.enable_periodic = false;
+  const sim::Scenario rest = sim::loadScenario(calibration_scenario);
+  // The whole recording is the window (its last sample is one period short of the duration).
+  config.calibration_duration = rest.duration - 1.5 / rest.rate;
+  pbc::Compensator calibration(config);
+  for (const auto& s : simulate(rest, 1000))
+    calibration.addSample(sim::toImuSample(s), nullptr);
+  if (!calibration.calibrated())
+    throw std::runtime_error("the calibration scenario did not complete a calibration window");
+  const Vector3 bias = calibration.constantBias();
+  std::cerr << "constant bias from " << calibration_scenario << ": " << bias.transpose() << " m/s^2\n";
+  return bias;
+}
+
+/// Paper mode, and paper mode with alpha/beta tuned automatically (tunePaperGains).
+struct PaperConfigs
+{
+  pbc::CompensatorConfig paper;
+  pbc::CompensatorConfig tuned;
+  bool holds_station = false;  ///< whether the training run holds station (else nothing is tuned)
+  std::string note;            ///< how the gains were tuned, or why they were not (after the table)
+};
+
+/// The note on the gains tunePaperGains found.
+std::string tuningNote(const pbc::GainTuningResult& tuning)
+{
+  std::ostringstream note;
+  note << "\n`paper tuned`: gains tuned on seed " << kTrainingSeed << " (slow-motion RMS there, x y z: ";
+  for (int i = 0; i < 3; ++i)
+    note << format(tuning.score_start[i], "%.4f") << " -> " << format(tuning.score[i], "%.4f") << (i < 2 ? ", " : " m");
+  note << "); alpha_v beta_v alpha_p beta_p per axis:";
+  for (int i = 0; i < 3; ++i)
+    note << " "
+         << "xyz"[i] << " " << tuning.gains[i].alpha_v << " " << tuning.gains[i].beta_v << " "
+         << tuning.gains[i].alpha_p << " " << tuning.gains[i].beta_p << (i < 2 ? ";" : "\n");
+  return note.str();
+}
+
+/// Paper mode's gains tuned on a training run of the same scenario whose seed is not among the
+/// evaluated ones; the tuning's criterion takes the vessel as holding station (true slow motion
+/// zero) and uses no truth.
+PaperConfigs tunePaper(const sim::Scenario& scenario, const std::optional<Vector3>& calibrated_bias, double settle)
+{
+  PaperConfigs configs;
+  configs.paper.mode = pbc::Mode::kPaper;
+  configs.paper.assume_static_calibration = true;
+  configs.tuned = configs.paper;
+  const std::vector<sim::Sample> training_run = simulate(scenario, kTrainingSeed);
+  double travelled = 0.0;  // farthest the true slow motion gets from its start [m]
+  for (const auto& s : training_run)
+    travelled = std::max(travelled, (s.truth.slow_position - training_run.front().truth.slow_position).norm());
+  configs.holds_station = travelled <= kStationRadius;
+  if (!configs.holds_station)
+  {
+    // A user tunes on a recording made while moored or at anchor; underway there is none.
+    configs.note =
+        "\n`paper tuned` is not run here: the tuning needs a recording made while holding station "
+        "(its criterion takes the slow motion as zero), and this ship goes " +
+        format(travelled, "%.0f") + " m from its start.\n";
+    std::cerr << configs.note;
+    return configs;
+  }
+  std::vector<pbc::ImuSample> training;
+  for (const auto& s : training_run)
+    training.push_back(sim::toImuSample(s));
+  const pbc::GainTuningResult tuning =
+      pbc::tunePaperGains(training, configs.paper, calibrated_bias, settle, {}, 2, [](int done, int total) {
+        std::cerr << "\rtuning paper gains on seed " << kTrainingSeed << ": run " << done << "/" << total << std::flush;
+      });
+  configs.tuned.gains = tuning.gains;
+  configs.note = tuningNote(tuning);
+  std::cerr << "\n" << configs.note;
+  return configs;
+}
+
+/// What every seed's run is scored with.
+struct Setup
+{
+  sim::Scenario scenario;
+  std::optional<Vector3> calibrated_bias;  ///< from --calibration-scenario, if given
+  PaperConfigs paper;
+};
+
+/// The methods in table order.
+std::vector<std::string> methodNames(const Options& options, bool holds_station)
+{
+  std::vector<std::string> methods = { "raw",     "highpass",     "constant",  "paper",    "paper tuned",
+                                       "default", kHarmonicHeave, kFixedLevel, kGyroLevel, kGyroLevelBias };
+  if (!holds_station)
+    methods.erase(std::find(methods.begin(), methods.end(), "paper tuned"));
+  for (const auto& estimate : options.estimates)
+    methods.push_back(estimate.first);
+  return methods;
+}
+
+/// Per method, its errors of each seed; the default mode's period tracking of each seed.
+struct Results
+{
+  std::map<std::string, std::vector<Errors>> errors;
+  std::vector<PeriodErrors> periods;
+};
+
+/// Simulates one seed and scores every method on it.
+void runSeed(const Setup& setup, const Options& options, int seed, Results* results)
+{
+  const sim::Scenario& scenario = setup.scenario;
+  const std::optional<Vector3>& calibrated_bias = setup.calibrated_bias;
+  std::map<std::string, std::vector<Errors>>& errors = results->errors;
+  const auto samples = simulate(scenario, static_cast<std::uint64_t>(seed));
+  if (samples.size() < 16)
+    throw std::runtime_error("scenario produced too few samples");
+  pbc::CompensatorConfig constant = setup.paper.paper;
+  constant.enable_periodic = false;
+  pbc::CompensatorConfig ours;
+  ours.lever_arm = installedLeverArm(scenario);
+  errors["raw"].push_back(integrateRaw(samples, pbc::kStandardGravity));
+  errors["highpass"].push_back(highPassBaseline(samples, pbc::kStandardGravity, options.settle));
+  errors["constant"].push_back(evaluate(samples, scenario.rate, constant, calibrated_bias, options.settle));
+  errors["paper"].push_back(evaluate(samples, scenario.rate, setup.paper.paper, calibrated_bias, options.settle));
+  if (setup.paper.holds_station)
+    errors["paper tuned"].push_back(
+        evaluate(samples, scenario.rate, setup.paper.tuned, calibrated_bias, options.settle));
+  results->periods.emplace_back();
+  errors["default"].push_back(
+      evaluate(samples, scenario.rate, ours, std::nullopt, options.settle, &results->periods.back()));
+  pbc::CompensatorConfig harmonic_heave = ours;
+  harmonic_heave.heave_filter = false;
+  errors[kHarmonicHeave].push_back(evaluate(samples, scenario.rate, harmonic_heave, std::nullopt, options.settle));
+  // The same without the IMU's orientation: one level frame, or the gyro's attitude without
+  // and with its bias estimated.
+  pbc::CompensatorConfig fixed_level = ours;
+  fixed_level.gyro_attitude = false;
+  errors[kFixedLevel].push_back(
+      evaluate(samples, scenario.rate, fixed_level, std::nullopt, options.settle, nullptr, Orientation::kWithheld));
+  pbc::CompensatorConfig gyro = ours;
+  gyro.gyro_attitude = true;
+  gyro.estimate_gyro_bias = false;
+  errors[kGyroLevel].push_back(
+      evaluate(samples, scenario.rate, gyro, std::nullopt, options.settle, nullptr, Orientation::kWithheld));
+  gyro.estimate_gyro_bias = true;
+  errors[kGyroLevelBias].push_back(
+      evaluate(samples, scenario.rate, gyro, std::nullopt, options.settle, nullptr, Orientation::kWithheld));
+  for (const auto& [name, pattern] : options.estimates)
+    errors[name].push_back(scoreEstimate(samples, seedPath(pattern, seed), options.settle));
+}
+
+/// The error table, per method and axis the medians over seeds; `csv`, if open, receives every
+/// seed's values.
+std::string errorTable(const std::vector<std::string>& methods,
+                       const std::map<std::string, std::vector<Errors>>& errors, std::ofstream* csv)
+{
+  std::ostringstream table;
+  table << "| method | axis | slow-motion error at 60 s [m] | at 10 min [m] | at 30 min [m] | at end [m] "
+           "| slow-motion RMS error [m] | total position error at end [m] | total position RMS error [m] "
+           "| wave RMS error [% of true wave RMS] | wave RMS error [% of Hs] |\n"
+           "|---|---|---|---|---|---|---|---|---|---|---|\n";
+  if (csv->is_open())
+    *csv << "method,axis,seed,slow_60s_m,slow_10min_m,slow_30min_m,slow_final_m,slow_rms_m,total_final_m,"
+            "total_rms_m,wave_rms_percent,wave_hs_percent\n";
+  const char* axes = "xyz";
+  for (const auto& method : methods)
+    for (int i = 0; i < 3; ++i)
+    {
+      // Columns in table order; each holds one value per seed.
+      std::array<std::vector<double>, 9> columns;
+      const std::vector<Errors>& runs = errors.at(method);
+      for (std::size_t k = 0; k < runs.size(); ++k)
+      {
+        const Errors& e = runs[k];
+        const std::array<double, 9> row = { e.slow_at[0][i], e.slow_at[1][i],       e.slow_at[2][i],
+                                            e.slow_final[i], e.slow_rms[i],         e.total_final[i],
+                                            e.total_rms[i],  e.wave_rms_percent[i], e.wave_hs_percent[i] };
+        if (csv->is_open())
+          *csv << method << "," << axes[i] << "," << k + 1;
+        for (std::size_t c = 0; c < row.size(); ++c)
+        {
+          columns[c].push_back(row[c]);
+          if (csv->is_open())
+            *csv << "," << row[c];
+        }
+        if (csv->is_open())
+          *csv << "\n";
+      }
+      table << "| " << method << " | " << axes[i];
+      for (std::size_t c = 0; c < columns.size(); ++c)
+        table << " | " << format(median(columns[c]), c < 7 ? "%.4f" : (c == 7 ? "%.1f" : "%.2f"));
+      table << " |\n";
+    }
+  return table.str();
+}
+
+/// Period tracking of the default mode (the paper mode uses the same tracker), medians over seeds.
+std::string periodTable(const std::vector<PeriodErrors>& periods)
+{
+  std::ostringstream table;
+  table << "\nPeriod tracking (default mode), medians over seeds:\n\n"
+           "| axis | first lock [s] | FFT hops locked after it [%] | dominant-frequency error, median [%] "
+           "| 95th percentile [%] |\n|---|---|---|---|---|\n";
+  const char* axes = "xyz";
+  for (int i = 0; i < 3; ++i)
+  {
+    std::array<std::vector<double>, 4> columns;
+    int never = 0;
+    for (const PeriodErrors& p : periods)
+    {
+      never += std::isnan(p.lock_time[i]) ? 1 : 0;
+      const std::array<double, 4> row = { p.lock_time[i], p.locked_percent[i], p.error_median[i], p.error_p95[i] };
+      for (std::size_t c = 0; c < row.size(); ++c)
+        columns[c].push_back(row[c]);
+    }
+    table << "| " << axes[i] << " | " << format(median(columns[0]), "%.1f")
+          << (never > 0 ? " (never in " + std::to_string(never) + " of " + std::to_string(periods.size()) + ")" : "")
+          << " | " << format(median(columns[1]), "%.0f") << " | " << format(median(columns[2]), "%.2f") << " | "
+          << format(median(columns[3]), "%.2f") << " |\n";
+  }
+  return table.str();
+}
 }  // namespace
 
 int main(int argc, char** argv)
@@ -539,187 +763,33 @@ int main(int argc, char** argv)
       markdown_file.emplace(options.markdown);
     if (!options.csv.empty())
       csv_file.emplace(options.csv);
-    sim::Scenario scenario = sim::loadScenario(options.scenario);
+    Setup setup;
+    setup.scenario = sim::loadScenario(options.scenario);
     if (options.duration > 0.0)
-      scenario.duration = options.duration;
-    std::optional<Vector3> calibrated_bias;
+      setup.scenario.duration = options.duration;
     if (!options.calibration_scenario.empty())
-    {
-      // Paper Sec. 4.1: the constant bias from a recording at rest.
-      pbc::CompensatorConfig config;
-      config.mode = pbc::Mode::kPaper;
-      config.assume_static_calibration = true;
-      config.enable_periodic = false;
-      const sim::Scenario rest = sim::loadScenario(options.calibration_scenario);
-      // The whole recording is the window (its last sample is one period short of the duration).
-      config.calibration_duration = rest.duration - 1.5 / rest.rate;
-      pbc::Compensator calibration(config);
-      for (const auto& s : simulate(rest, 1000))
-        calibration.addSample(sim::toImuSample(s), nullptr);
-      if (!calibration.calibrated())
-        throw std::runtime_error("the calibration scenario did not complete a calibration window");
-      calibrated_bias = calibration.constantBias();
-      std::cerr << "constant bias from " << options.calibration_scenario << ": "
-                << calibrated_bias->transpose() << " m/s^2\n";
-    }
+      setup.calibrated_bias = staticBias(options.calibration_scenario);
+    setup.paper = tunePaper(setup.scenario, setup.calibrated_bias, options.settle);
 
-    // Paper mode with alpha/beta tuned automatically (tunePaperGains) on a training run of the same
-    // scenario whose seed is not among the evaluated ones; its criterion takes the vessel as
-    // holding station (true slow motion zero) and uses no truth.
-    pbc::CompensatorConfig paper;
-    paper.mode = pbc::Mode::kPaper;
-    paper.assume_static_calibration = true;
-    pbc::CompensatorConfig tuned = paper;
-    std::string tuning_note;
-    const std::vector<sim::Sample> training_run = simulate(scenario, kTrainingSeed);
-    double travelled = 0.0;  // farthest the true slow motion gets from its start [m]
-    for (const auto& s : training_run)
-      travelled = std::max(travelled, (s.truth.slow_position - training_run.front().truth.slow_position).norm());
-    const bool holds_station = travelled <= kStationRadius;
-    if (!holds_station)
-    {
-      // A user tunes on a recording made while moored or at anchor; underway there is none.
-      tuning_note = "\n`paper tuned` is not run here: the tuning needs a recording made while holding station "
-                    "(its criterion takes the slow motion as zero), and this ship goes " +
-                    format(travelled, "%.0f") + " m from its start.\n";
-      std::cerr << tuning_note;
-    }
-    else
-    {
-      std::vector<pbc::ImuSample> training;
-      for (const auto& s : training_run)
-        training.push_back(sim::toImuSample(s));
-      const pbc::GainTuningResult tuning =
-          pbc::tunePaperGains(training, paper, calibrated_bias, options.settle, {}, 2, [](int done, int total) {
-            std::cerr << "\rtuning paper gains on seed " << kTrainingSeed << ": run " << done << "/" << total << std::flush;
-          });
-      tuned.gains = tuning.gains;
-      std::ostringstream note;
-      note << "\n`paper tuned`: gains tuned on seed " << kTrainingSeed << " (slow-motion RMS there, x y z: ";
-      for (int i = 0; i < 3; ++i)
-        note << format(tuning.score_start[i], "%.4f") << " -> " << format(tuning.score[i], "%.4f") << (i < 2 ? ", " : " m");
-      note << "); alpha_v beta_v alpha_p beta_p per axis:";
-      for (int i = 0; i < 3; ++i)
-        note << " " << "xyz"[i] << " " << tuning.gains[i].alpha_v << " " << tuning.gains[i].beta_v << " "
-             << tuning.gains[i].alpha_p << " " << tuning.gains[i].beta_p << (i < 2 ? ";" : "\n");
-      tuning_note = note.str();
-      std::cerr << "\n" << tuning_note;
-    }
-
-    std::vector<std::string> methods = { "raw",     "highpass", "constant", "paper", "paper tuned", "default",
-                                         kHarmonicHeave, kFixedLevel, kGyroLevel, kGyroLevelBias };
-    if (!holds_station)
-      methods.erase(std::find(methods.begin(), methods.end(), "paper tuned"));
-    for (const auto& estimate : options.estimates)
-      methods.push_back(estimate.first);
-    std::map<std::string, std::vector<Errors>> results;
-    std::vector<PeriodErrors> periods;  // default mode, per seed
+    const std::vector<std::string> methods = methodNames(options, setup.paper.holds_station);
+    Results results;
     for (int seed = 1; seed <= options.seeds; ++seed)
     {
       std::cerr << "\rseed " << seed << "/" << options.seeds << std::flush;
-      const auto samples = simulate(scenario, static_cast<std::uint64_t>(seed));
-      if (samples.size() < 16)
-        throw std::runtime_error("scenario produced too few samples");
-      pbc::CompensatorConfig constant = paper;
-      constant.enable_periodic = false;
-      pbc::CompensatorConfig ours;
-      ours.lever_arm = installedLeverArm(scenario);
-      results["raw"].push_back(integrateRaw(samples, pbc::kStandardGravity));
-      results["highpass"].push_back(highPassBaseline(samples, pbc::kStandardGravity, options.settle));
-      results["constant"].push_back(evaluate(samples, scenario.rate, constant, calibrated_bias, options.settle));
-      results["paper"].push_back(evaluate(samples, scenario.rate, paper, calibrated_bias, options.settle));
-      if (holds_station)
-        results["paper tuned"].push_back(evaluate(samples, scenario.rate, tuned, calibrated_bias, options.settle));
-      periods.emplace_back();
-      results["default"].push_back(evaluate(samples, scenario.rate, ours, std::nullopt, options.settle, &periods.back()));
-      pbc::CompensatorConfig harmonic_heave = ours;
-      harmonic_heave.heave_filter = false;
-      results[kHarmonicHeave].push_back(evaluate(samples, scenario.rate, harmonic_heave, std::nullopt, options.settle));
-      // The same without the IMU's orientation: one level frame, or the gyro's attitude without
-      // and with its bias estimated.
-      pbc::CompensatorConfig fixed_level = ours;
-      fixed_level.gyro_attitude = false;
-      results[kFixedLevel].push_back(
-          evaluate(samples, scenario.rate, fixed_level, std::nullopt, options.settle, nullptr, Orientation::kWithheld));
-      pbc::CompensatorConfig gyro = ours;
-      gyro.gyro_attitude = true;
-      gyro.estimate_gyro_bias = false;
-      results[kGyroLevel].push_back(
-          evaluate(samples, scenario.rate, gyro, std::nullopt, options.settle, nullptr, Orientation::kWithheld));
-      gyro.estimate_gyro_bias = true;
-      results[kGyroLevelBias].push_back(
-          evaluate(samples, scenario.rate, gyro, std::nullopt, options.settle, nullptr, Orientation::kWithheld));
-      for (const auto& [name, pattern] : options.estimates)
-        results[name].push_back(scoreEstimate(samples, seedPath(pattern, seed), options.settle));
+      runSeed(setup, options, seed, &results);
     }
     std::cerr << "\n";
 
-    std::ostringstream table;
-    table << "| method | axis | slow-motion error at 60 s [m] | at 10 min [m] | at 30 min [m] | at end [m] "
-             "| slow-motion RMS error [m] | total position error at end [m] | total position RMS error [m] "
-             "| wave RMS error [% of true wave RMS] | wave RMS error [% of Hs] |\n"
-             "|---|---|---|---|---|---|---|---|---|---|---|\n";
     std::ofstream csv;
     if (csv_file)
-    {
       csv.open(csv_file->temporary());
-      csv << "method,axis,seed,slow_60s_m,slow_10min_m,slow_30min_m,slow_final_m,slow_rms_m,total_final_m,"
-             "total_rms_m,wave_rms_percent,wave_hs_percent\n";
-    }
-    const char* axes = "xyz";
-    for (const auto& method : methods)
-      for (int i = 0; i < 3; ++i)
-      {
-        // Columns in table order; each holds one value per seed.
-        std::array<std::vector<double>, 9> columns;
-        for (std::size_t k = 0; k < results[method].size(); ++k)
-        {
-          const Errors& e = results[method][k];
-          const std::array<double, 9> row = { e.slow_at[0][i],    e.slow_at[1][i],     e.slow_at[2][i],
-                                              e.slow_final[i],    e.slow_rms[i],       e.total_final[i],
-                                              e.total_rms[i],     e.wave_rms_percent[i], e.wave_hs_percent[i] };
-          if (csv.is_open())
-            csv << method << "," << axes[i] << "," << k + 1;
-          for (std::size_t c = 0; c < row.size(); ++c)
-          {
-            columns[c].push_back(row[c]);
-            if (csv.is_open())
-              csv << "," << row[c];
-          }
-          if (csv.is_open())
-            csv << "\n";
-        }
-        table << "| " << method << " | " << axes[i];
-        for (std::size_t c = 0; c < columns.size(); ++c)
-          table << " | " << format(median(columns[c]), c < 7 ? "%.4f" : (c == 7 ? "%.1f" : "%.2f"));
-        table << " |\n";
-      }
-    table << tuning_note;
-    // Period tracking of the default mode (the paper mode uses the same tracker).
-    table << "\nPeriod tracking (default mode), medians over seeds:\n\n"
-             "| axis | first lock [s] | FFT hops locked after it [%] | dominant-frequency error, median [%] "
-             "| 95th percentile [%] |\n|---|---|---|---|---|\n";
-    for (int i = 0; i < 3; ++i)
-    {
-      std::array<std::vector<double>, 4> columns;
-      int never = 0;
-      for (const PeriodErrors& p : periods)
-      {
-        never += std::isnan(p.lock_time[i]) ? 1 : 0;
-        const std::array<double, 4> row = { p.lock_time[i], p.locked_percent[i], p.error_median[i], p.error_p95[i] };
-        for (std::size_t c = 0; c < row.size(); ++c)
-          columns[c].push_back(row[c]);
-      }
-      table << "| " << axes[i] << " | " << format(median(columns[0]), "%.1f")
-            << (never > 0 ? " (never in " + std::to_string(never) + " of " + std::to_string(periods.size()) + ")" : "")
-            << " | " << format(median(columns[1]), "%.0f") << " | " << format(median(columns[2]), "%.2f") << " | "
-            << format(median(columns[3]), "%.2f") << " |\n";
-    }
+    const std::string table =
+        errorTable(methods, results.errors, &csv) + setup.paper.note + periodTable(results.periods);
     std::ostringstream heading;
-    heading << "scenario " << scenario.name << ": " << scenario.rate << " Hz, " << scenario.duration
+    heading << "scenario " << setup.scenario.name << ": " << setup.scenario.rate << " Hz, " << setup.scenario.duration
             << " s; medians over seeds 1.." << options.seeds << "; RMS errors from " << options.settle
             << " s to the end\n";
-    std::cout << heading.str() << table.str();
+    std::cout << heading.str() << table;
     if (csv_file)
     {
       csv.close();
@@ -728,7 +798,7 @@ int main(int argc, char** argv)
       csv_file->commit();
     }
     if (markdown_file)
-      markdown_file->commit(heading.str() + "\n" + table.str());
+      markdown_file->commit(heading.str() + "\n" + table);
     return 0;
   }
   catch (const std::exception& e)

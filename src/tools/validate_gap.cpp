@@ -380,161 +380,225 @@ struct CaseResult
   double effect_max_z = 0.0;
 };
 
-/// The validation (or --bench-hours), writing its tables to the outputs given.
-int validate(Options opt, pbc::OutputFile* md_file, pbc::OutputFile* json_file)
+/// Speed: a sea recording of `hours` at 100 Hz with a withheld vibration, diagnosed against the
+/// scenario without it (the recording is simulated in memory, no file I/O).
+int bench(double hours)
 {
-  if (opt.bench_hours > 0)
+  const sim::Scenario base = baseScenario("sea", 100.0, hours * 3600.0);
+  sim::Scenario real_s = base;
+  for (const auto& e : withheldEffect("vibration", 1.0, base))
   {
-    // Speed: a sea recording of bench_hours at 100 Hz with a withheld vibration, diagnosed
-    // against the scenario without it (the recording is simulated in memory, no file I/O).
-    const sim::Scenario base = baseScenario("sea", 100.0, opt.bench_hours * 3600.0);
-    sim::Scenario real_s = base;
-    for (const auto& e : withheldEffect("vibration", 1.0, base))
+    real_s.effects.push_back(e);
+  }
+  const auto s0 = std::chrono::steady_clock::now();
+  gap::Recording real = gap::simulateRecording(real_s, 4242);
+  const double tsim = std::chrono::duration<double>(std::chrono::steady_clock::now() - s0).count();
+  const gap::Report rep = gap::diagnose(real, base, gap::DiagnoseOptions());
+  std::printf(
+      "bench: %.3g h at 100 Hz (%zu samples): recording simulated in %.1f s, diagnosed in %.1f s (verdict %s, "
+      "shrink %.0f %%)\n",
+      hours, real.size(), tsim, rep.seconds, rep.verdict_effect.c_str(), 100 * rep.shrink_withheld);
+  return 0;
+}
+
+/// Effects of the simulator's vocabulary the validation withholds.
+const std::vector<std::string>& simulatorEffects()
+{
+  static const std::vector<std::string> e = {
+    "lever_arm",        "misalignment",     "scale_factor",     "constant_bias", "periodic_bias", "thermal_drift",
+    "bias_random_walk", "bias_instability", "vibration",        "white_noise",   "saturation",    "quantization",
+    "gravity_leakage",  "sample_hold",      "timestamp_jitter", "dropouts"
+  };
+  return e;
+}
+
+/// The motions, sizes and seeds the validation runs.
+struct Grid
+{
+  std::vector<std::string> motions;
+  std::vector<double> sizes;
+  int seeds = 0;
+};
+
+Grid caseGrid(const Options& opt)
+{
+  // "sea-foreign": the same sea, but "real" is written by foreignRecording() (another noise
+  // generator, other motion details), for the effects it knows.
+  Grid grid = { { "static", "sinusoids", "sea", "sea-foreign" }, { 1.0, 0.3 }, opt.seeds };
+  if (opt.small)
+  {
+    grid.motions = { "sinusoids", "sea-foreign" };
+    grid.sizes = { 1.0 };
+    grid.seeds = 1;
+  }
+  if (!opt.only_motion.empty())
+  {
+    grid.motions = { opt.only_motion };
+  }
+  return grid;
+}
+
+/// Whether foreignRecording() writes the "real" recording of a motion ("sea-foreign").
+bool isForeign(const std::string& motion)
+{
+  return motion.size() > 8 && motion.substr(motion.size() - 8) == "-foreign";
+}
+
+/// The (effect, size) cases of one motion, those without a withheld effect last.
+std::vector<std::pair<std::string, double>> motionCases(bool foreign, bool small, const std::vector<double>& sizes)
+{
+  std::vector<std::pair<std::string, double>> cases;
+  for (const auto& e : foreign ? foreignEffects() : simulatorEffects())
+  {
+    for (double k : sizes)
+    {
+      if (!(foreign && small && e != "vibration"))
+      {
+        cases.push_back({ e, k });
+      }
+    }
+  }
+  cases.push_back({ "none", 0.0 });
+  if (!small)
+  {
+    cases.push_back({ "none", 0.0 });
+  }
+  return cases;
+}
+
+/// The scenario of the "real" recording: base with the withheld effect at size factor k.
+sim::Scenario withheldScenario(const sim::Scenario& base, const std::string& effect, double k)
+{
+  sim::Scenario real_s = base;
+  if (effect == "saturation")
+  {
+    real_s.effects.push_back(saturationFor(base, k));
+  }
+  else if (effect == "white_noise")
+  {
+    real_s.effects.erase(std::remove_if(real_s.effects.begin(), real_s.effects.end(),
+                                        [](const sim::EffectSpec& e) { return e.name == "white_noise"; }),
+                         real_s.effects.end());
+    for (const auto& e : withheldEffect(effect, k, base))
     {
       real_s.effects.push_back(e);
     }
-    const auto s0 = std::chrono::steady_clock::now();
-    gap::Recording real = gap::simulateRecording(real_s, 4242);
-    const double tsim = std::chrono::duration<double>(std::chrono::steady_clock::now() - s0).count();
-    const gap::Report rep = gap::diagnose(real, base, gap::DiagnoseOptions());
-    std::printf("bench: %.3g h at 100 Hz (%zu samples): recording simulated in %.1f s, diagnosed in %.1f s (verdict %s, "
-                "shrink %.0f %%)\n",
-                opt.bench_hours, real.size(), tsim, rep.seconds, rep.verdict_effect.c_str(), 100 * rep.shrink_withheld);
-    return 0;
   }
-  const std::vector<std::string> effects = { "lever_arm",      "misalignment",     "scale_factor",  "constant_bias",
-                                             "periodic_bias",  "thermal_drift",    "bias_random_walk",
-                                             "bias_instability", "vibration",      "white_noise",   "saturation",
-                                             "quantization",   "gravity_leakage",  "sample_hold",   "timestamp_jitter",
-                                             "dropouts" };
-  // "sea-foreign": the same sea, but "real" is written by foreignRecording() (another noise
-  // generator, other motion details), for the effects it knows.
-  std::vector<std::string> motions = { "static", "sinusoids", "sea", "sea-foreign" };
-  std::vector<double> sizes = { 1.0, 0.3 };
-  if (opt.small)
+  else if (effect != "none")
   {
-    motions = { "sinusoids", "sea-foreign" };
-    sizes = { 1.0 };
-    opt.seeds = 1;
-  }
-  std::vector<CaseResult> results;
-  const auto t0 = std::chrono::steady_clock::now();
-  gap::DiagnoseOptions dopt;
-  int case_index = 0;
-  if (!opt.only_motion.empty())
-  {
-    motions = { opt.only_motion };
-  }
-  for (const std::string& motion : motions)
-  {
-    const bool foreign = motion.size() > 8 && motion.substr(motion.size() - 8) == "-foreign";
-    const sim::Scenario base = baseScenario(foreign ? motion.substr(0, motion.size() - 8) : motion, opt.rate, opt.duration);
-    std::vector<std::pair<std::string, double>> cases;
-    for (const auto& e : foreign ? foreignEffects() : effects)
+    for (const auto& e : withheldEffect(effect, k, base))
     {
-      for (double k : sizes)
+      real_s.effects.push_back(e);
+    }
+  }
+  return real_s;
+}
+
+/// One case: the effect withheld at size factor k from a motion's recording of a seed.
+struct Case
+{
+  std::string motion;
+  std::string effect;
+  double k = 0.0;
+  std::uint64_t seed = 0;
+};
+
+/// The diagnosis' figures in cr: its verdict, and the shrink of the named effect, or of the
+/// withheld effect's candidate when another was named.
+void takeReport(const gap::Report& rep, CaseResult* cr)
+{
+  cr->verdict = rep.verdict_effect;
+  cr->confidence = rep.confidence;
+  cr->gap_before = rep.gap_before;
+  cr->null_gap = rep.null_gap_held;
+  cr->seconds = rep.seconds;
+  cr->shrink = rep.shrink_withheld;
+  for (const auto& c : rep.ranking)
+  {
+    if (c.effect == cr->effect)
+    {
+      cr->shrink = std::max(cr->shrink, c.shrink);
+    }
+  }
+  if (rep.verdict_effect == "no_gap" || rep.verdict_effect == "none")
+  {
+    cr->shrink = rep.shrink_withheld;
+    for (const auto& c : rep.ranking)
+    {
+      if (c.effect == cr->effect)
       {
-        if (!(foreign && opt.small && e != "vibration"))
-        {
-          cases.push_back({ e, k });
-        }
+        cr->shrink = c.shrink;
       }
     }
-    cases.push_back({ "none", 0.0 });
-    if (!opt.small)
+  }
+}
+
+/// Simulates the case's "real" recording, diagnoses it against base and scores the verdict (an
+/// error of the diagnosis is the verdict "error: ...").
+CaseResult runCase(const Case& c, const sim::Scenario& base, bool verbose)
+{
+  const bool foreign = isForeign(c.motion);
+  const sim::Scenario real_s = withheldScenario(base, c.effect, c.k);
+  const gap::DiagnoseOptions dopt;
+  CaseResult cr;
+  cr.motion = c.motion;
+  cr.effect = c.effect;
+  cr.size = c.k;
+  cr.seed = static_cast<int>(c.seed);
+  cr.why = sameSignal(c.effect, c.motion);
+  try
+  {
+    gap::Recording real =
+        foreign ? foreignRecording(base, c.effect, c.k, c.seed) : gap::simulateRecording(real_s, c.seed);
+    real.source = "validate " + c.motion + " " + c.effect;
+    const gap::Report rep = gap::diagnose(real, base, dopt);
+    if (c.effect != "none")
     {
-      cases.push_back({ "none", 0.0 });
+      const gap::Recording twin =
+          foreign ? foreignRecording(base, "none", 0.0, c.seed) : gap::simulateRecording(base, c.seed);
+      const Detectability d = effectShift(real, twin, c.effect, rep, dopt.fit_fraction);
+      cr.effect_gap = d.gap;
+      cr.effect_max_z = d.max_z;
+      if (cr.why.empty() && !d.detectable)
+      {
+        cr.why = "the effect alone moves the withheld features within the ensemble's spread";
+      }
     }
-    for (const auto& [effect, k] : cases)
+    cr.detectable = cr.why.empty();
+    if (verbose)
+    {
+      std::cerr << gap::reportSummary(rep);
+    }
+    takeReport(rep, &cr);
+  }
+  catch (const std::exception& e)
+  {
+    cr.verdict = std::string("error: ") + e.what();
+  }
+  return cr;
+}
+
+/// Every case of the grid, each reported on stderr unless --quiet.
+std::vector<CaseResult> runCases(const Options& opt, const Grid& grid)
+{
+  std::vector<CaseResult> results;
+  int case_index = 0;
+  for (const std::string& motion : grid.motions)
+  {
+    const bool foreign = isForeign(motion);
+    const sim::Scenario base =
+        baseScenario(foreign ? motion.substr(0, motion.size() - 8) : motion, opt.rate, opt.duration);
+    for (const auto& [effect, k] : motionCases(foreign, opt.small, grid.sizes))
     {
       if (!opt.only_effect.empty() && effect != opt.only_effect)
       {
         continue;
       }
-      for (int sd = 0; sd < opt.seeds; ++sd)
+      for (int sd = 0; sd < grid.seeds; ++sd)
       {
         ++case_index;
-        const std::uint64_t seed = 5000 + 37 * sd + case_index;
-        sim::Scenario real_s = base;
-        if (effect == "saturation")
-        {
-          real_s.effects.push_back(saturationFor(base, k));
-        }
-        else if (effect == "white_noise")
-        {
-          real_s.effects.erase(std::remove_if(real_s.effects.begin(), real_s.effects.end(),
-                                              [](const sim::EffectSpec& e) { return e.name == "white_noise"; }),
-                               real_s.effects.end());
-          for (const auto& e : withheldEffect(effect, k, base))
-          {
-            real_s.effects.push_back(e);
-          }
-        }
-        else if (effect != "none")
-        {
-          for (const auto& e : withheldEffect(effect, k, base))
-          {
-            real_s.effects.push_back(e);
-          }
-        }
-        CaseResult cr;
-        cr.motion = motion;
-        cr.effect = effect;
-        cr.size = k;
-        cr.seed = static_cast<int>(seed);
-        cr.why = sameSignal(effect, motion);
-        try
-        {
-          gap::Recording real = foreign ? foreignRecording(base, effect, k, seed) : gap::simulateRecording(real_s, seed);
-          real.source = "validate " + motion + " " + effect;
-          const gap::Report rep = gap::diagnose(real, base, dopt);
-          if (effect != "none")
-          {
-            const gap::Recording twin = foreign ? foreignRecording(base, "none", 0.0, seed)
-                                                : gap::simulateRecording(base, seed);
-            const Detectability d = effectShift(real, twin, effect, rep, dopt.fit_fraction);
-            cr.effect_gap = d.gap;
-            cr.effect_max_z = d.max_z;
-            if (cr.why.empty() && !d.detectable)
-            {
-              cr.why = "the effect alone moves the withheld features within the ensemble's spread";
-            }
-          }
-          cr.detectable = cr.why.empty();
-          if (opt.verbose)
-          {
-            std::cerr << gap::reportSummary(rep);
-          }
-          cr.verdict = rep.verdict_effect;
-          cr.confidence = rep.confidence;
-          cr.gap_before = rep.gap_before;
-          cr.null_gap = rep.null_gap_held;
-          cr.seconds = rep.seconds;
-          // shrink of the named effect, or of the true effect's candidate when another was named
-          cr.shrink = rep.shrink_withheld;
-          for (const auto& c : rep.ranking)
-          {
-            if (c.effect == effect)
-            {
-              cr.shrink = std::max(cr.shrink, c.shrink);
-            }
-          }
-          if (rep.verdict_effect == "no_gap" || rep.verdict_effect == "none")
-          {
-            cr.shrink = rep.shrink_withheld;
-            for (const auto& c : rep.ranking)
-            {
-              if (c.effect == effect)
-              {
-                cr.shrink = c.shrink;
-              }
-            }
-          }
-        }
-        catch (const std::exception& e)
-        {
-          cr.verdict = std::string("error: ") + e.what();
-        }
+        const Case c = { motion, effect, k, static_cast<std::uint64_t>(5000 + 37 * sd + case_index) };
+        const CaseResult cr = runCase(c, base, opt.verbose);
         if (!opt.quiet)
         {
           std::fprintf(stderr, "%-9s %-17s size %.1f seed %5d -> %-30s conf %.2f shrink %5.1f %% gap %.3g (null %.3g) "
@@ -547,70 +611,90 @@ int validate(Options opt, pbc::OutputFile* md_file, pbc::OutputFile* json_file)
       }
     }
   }
-  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return results;
+}
 
-  // Scores.
-  auto named = [](const CaseResult& c) {
-    // the verdict names the effect (alone, in a pair, or as its line twin periodic_bias/vibration)
-    const std::string& v = c.verdict;
-    if (v == c.effect || v.rfind(c.effect + "+", 0) == 0 || (v.size() > c.effect.size() && v.substr(v.size() - c.effect.size() - 1) == "+" + c.effect))
-    {
-      return true;
-    }
-    return false;
-  };
+/// Whether the verdict names the withheld effect (alone, in a pair, or as its line twin
+/// periodic_bias/vibration).
+bool named(const CaseResult& c)
+{
+  const std::string& v = c.verdict;
+  if (v == c.effect || v.rfind(c.effect + "+", 0) == 0 ||
+      (v.size() > c.effect.size() && v.substr(v.size() - c.effect.size() - 1) == "+" + c.effect))
+  {
+    return true;
+  }
+  return false;
+}
+
+struct Scores
+{
   int det = 0, det_ok = 0, nulls = 0, null_confident = 0;
-  std::vector<double> shrinks;
-  std::map<std::string, std::pair<int, int>> per_effect;  // named, detectable cases
-  std::map<std::string, std::map<std::string, int>> confusion;
+  std::vector<double> shrinks;                                  ///< sorted, of the cases named correctly
+  std::map<std::string, std::pair<int, int>> per_effect;        ///< named, detectable cases
+  std::map<std::string, std::map<std::string, int>> confusion;  ///< withheld effect -> verdict -> count
+  double median_shrink = 0.0;
+  double accuracy = 0.0;
+  bool pass = false;
+};
+
+Scores score(const std::vector<CaseResult>& results)
+{
+  Scores s;
   for (const auto& c : results)
   {
     if (c.effect == "none")
     {
-      ++nulls;
-      null_confident += (c.confidence >= 0.5) ? 1 : 0;
-      confusion["none"][c.verdict] += 1;
+      ++s.nulls;
+      s.null_confident += (c.confidence >= 0.5) ? 1 : 0;
+      s.confusion["none"][c.verdict] += 1;
       continue;
     }
-    confusion[c.effect][c.verdict] += 1;
+    s.confusion[c.effect][c.verdict] += 1;
     if (!c.detectable)
     {
       continue;
     }
-    ++det;
+    ++s.det;
     const bool ok = named(c);
-    det_ok += ok ? 1 : 0;
-    per_effect[c.effect].first += ok ? 1 : 0;
-    per_effect[c.effect].second += 1;
+    s.det_ok += ok ? 1 : 0;
+    s.per_effect[c.effect].first += ok ? 1 : 0;
+    s.per_effect[c.effect].second += 1;
     if (ok)
     {
-      shrinks.push_back(c.shrink);
+      s.shrinks.push_back(c.shrink);
     }
   }
-  std::sort(shrinks.begin(), shrinks.end());
-  const double median_shrink = shrinks.empty() ? 0.0 : shrinks[shrinks.size() / 2];
-  const double accuracy = det > 0 ? static_cast<double>(det_ok) / det : 0.0;
-  const bool pass = accuracy >= 0.9 && median_shrink >= 0.7 && null_confident == 0;
+  std::sort(s.shrinks.begin(), s.shrinks.end());
+  s.median_shrink = s.shrinks.empty() ? 0.0 : s.shrinks[s.shrinks.size() / 2];
+  s.accuracy = s.det > 0 ? static_cast<double>(s.det_ok) / s.det : 0.0;
+  s.pass = s.accuracy >= 0.9 && s.median_shrink >= 0.7 && s.null_confident == 0;
+  return s;
+}
 
+/// The run and its scores: what ran, the accuracy, the shrink's quantiles and the detectability test.
+std::string summaryMarkdown(const Options& opt, const Grid& grid, std::size_t cases, const Scores& s, double wall)
+{
   std::ostringstream md;
-  md << "validate_gap" << (opt.small ? " --small" : "") << ": " << results.size() << " cases ("
-     << opt.duration << " s at " << opt.rate << " Hz each; motions";
-  for (const auto& m : motions)
+  md << "validate_gap" << (opt.small ? " --small" : "") << ": " << cases << " cases (" << opt.duration << " s at "
+     << opt.rate << " Hz each; motions";
+  for (const auto& m : grid.motions)
   {
     md << " " << m;
   }
   md << "; sizes";
-  for (double k : sizes)
+  for (double k : grid.sizes)
   {
     md << " " << k;
   }
-  md << "; " << opt.seeds << " seed(s)), wall " << static_cast<int>(wall) << " s\n\n";
+  md << "; " << grid.seeds << " seed(s)), wall " << static_cast<int>(wall) << " s\n\n";
   char buf[512];
   std::snprintf(buf, sizeof(buf),
                 "named correctly: %d of %d detectable cases (%.1f %%); median shrink on withheld data (correctly "
                 "named): %.1f %%; confident verdicts (>= 0.5) on %d cases without a withheld effect: %d\n\n",
-                det_ok, det, 100 * accuracy, 100 * median_shrink, nulls, null_confident);
+                s.det_ok, s.det, 100 * s.accuracy, 100 * s.median_shrink, s.nulls, s.null_confident);
   md << buf;
+  const std::vector<double>& shrinks = s.shrinks;
   auto quantile = [&shrinks](double p) { return shrinks.empty() ? 0.0 : shrinks[static_cast<std::size_t>(p * (shrinks.size() - 1))]; };
   std::snprintf(buf, sizeof(buf), "shrink when named correctly: p10 %.0f %%, p25 %.0f %%, median %.0f %%, min %.0f %%\n\n",
                 100 * quantile(0.1), 100 * quantile(0.25), 100 * quantile(0.5), 100 * quantile(0.0));
@@ -620,27 +704,40 @@ int validate(Options opt, pbc::OutputFile* md_file, pbc::OutputFile* json_file)
         "constant_bias) moves the withheld part's features by a gap > 1.5 x the largest null gap or a |z| > "
         "max(1.5 x the null's largest |z|, 6), in the ensemble's own spread; and its signal is not, by physics, "
         "exactly another effect's in that motion.\n\n";
-  md << "| withheld effect | named / detectable | verdicts (count) |\n|---|---|---|\n";
-  for (const auto& e : effects)
+  return md.str();
+}
+
+/// The verdicts given when `effect` was withheld: "verdict count", comma-separated.
+std::string verdictCounts(const Scores& s, const std::string& effect)
+{
+  std::ostringstream out;
+  const auto verdicts = s.confusion.find(effect);
+  if (verdicts == s.confusion.end())
   {
-    const auto pe = per_effect[e];
-    md << "| " << e << " | " << pe.first << " / " << pe.second << " | ";
-    bool first = true;
-    for (const auto& [v, n] : confusion[e])
-    {
-      md << (first ? "" : ", ") << v << " " << n;
-      first = false;
-    }
-    md << " |\n";
+    return "";
   }
-  md << "| none | - | ";
   bool first = true;
-  for (const auto& [v, n] : confusion["none"])
+  for (const auto& [v, n] : verdicts->second)
   {
-    md << (first ? "" : ", ") << v << " " << n;
+    out << (first ? "" : ", ") << v << " " << n;
     first = false;
   }
-  md << " |\n\nNot detectable (effect's own shift: gap, largest |z|):";
+  return out.str();
+}
+
+/// The table of verdicts per withheld effect, the undetectable and the missed cases, and whether
+/// the targets are met.
+std::string casesMarkdown(const std::vector<CaseResult>& results, const Scores& s)
+{
+  std::ostringstream md;
+  md << "| withheld effect | named / detectable | verdicts (count) |\n|---|---|---|\n";
+  for (const auto& e : simulatorEffects())
+  {
+    const auto pe = s.per_effect.count(e) > 0 ? s.per_effect.at(e) : std::pair<int, int>(0, 0);
+    md << "| " << e << " | " << pe.first << " / " << pe.second << " | " << verdictCounts(s, e) << " |\n";
+  }
+  md << "| none | - | " << verdictCounts(s, "none") << " |\n\nNot detectable (effect's own shift: gap, largest |z|):";
+  char buf[512];
   for (const auto& c : results)
   {
     if (c.effect != "none" && !c.detectable)
@@ -663,32 +760,54 @@ int validate(Options opt, pbc::OutputFile* md_file, pbc::OutputFile* json_file)
       md << buf;
     }
   }
-  md << "\n\n" << (pass ? "TARGETS MET" : "TARGETS MISSED")
+  md << "\n\n"
+     << (s.pass ? "TARGETS MET" : "TARGETS MISSED")
      << " (>= 90 % of detectable cases named, median shrink >= 70 %, no confident verdict without a "
         "withheld effect)\n";
-  std::cout << md.str();
+  return md.str();
+}
+
+std::string resultsJson(const std::vector<CaseResult>& results, const Scores& s)
+{
+  std::ostringstream j;
+  j << "{\"accuracy\": " << s.accuracy << ", \"median_shrink\": " << s.median_shrink
+    << ", \"null_confident\": " << s.null_confident << ", \"cases\": [\n";
+  for (std::size_t i = 0; i < results.size(); ++i)
+  {
+    const auto& c = results[i];
+    j << (i ? ",\n" : "") << "{\"motion\": \"" << c.motion << "\", \"effect\": \"" << c.effect
+      << "\", \"size\": " << c.size << ", \"seed\": " << c.seed << ", \"verdict\": \"" << c.verdict
+      << "\", \"confidence\": " << c.confidence << ", \"shrink\": " << c.shrink << ", \"gap_before\": " << c.gap_before
+      << ", \"null_gap\": " << c.null_gap << ", \"detectable\": " << (c.detectable ? "true" : "false")
+      << ", \"effect_gap\": " << c.effect_gap << ", \"effect_max_z\": " << c.effect_max_z << "}";
+  }
+  j << "\n]}\n";
+  return j.str();
+}
+
+/// The validation (or --bench-hours), writing its tables to the outputs given.
+int validate(const Options& opt, pbc::OutputFile* md_file, pbc::OutputFile* json_file)
+{
+  if (opt.bench_hours > 0)
+  {
+    return bench(opt.bench_hours);
+  }
+  const Grid grid = caseGrid(opt);
+  const auto t0 = std::chrono::steady_clock::now();
+  const std::vector<CaseResult> results = runCases(opt, grid);
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const Scores scores = score(results);
+  const std::string md = summaryMarkdown(opt, grid, results.size(), scores, wall) + casesMarkdown(results, scores);
+  std::cout << md;
   if (md_file)
   {
-    md_file->commit(md.str());
+    md_file->commit(md);
   }
   if (json_file)
   {
-    std::ostringstream j;
-    j << "{\"accuracy\": " << accuracy << ", \"median_shrink\": " << median_shrink << ", \"null_confident\": "
-      << null_confident << ", \"cases\": [\n";
-    for (std::size_t i = 0; i < results.size(); ++i)
-    {
-      const auto& c = results[i];
-      j << (i ? ",\n" : "") << "{\"motion\": \"" << c.motion << "\", \"effect\": \"" << c.effect << "\", \"size\": " << c.size
-        << ", \"seed\": " << c.seed << ", \"verdict\": \"" << c.verdict << "\", \"confidence\": " << c.confidence
-        << ", \"shrink\": " << c.shrink << ", \"gap_before\": " << c.gap_before << ", \"null_gap\": " << c.null_gap
-        << ", \"detectable\": " << (c.detectable ? "true" : "false") << ", \"effect_gap\": " << c.effect_gap
-        << ", \"effect_max_z\": " << c.effect_max_z << "}";
-    }
-    j << "\n]}\n";
-    json_file->commit(j.str());
+    json_file->commit(resultsJson(results, scores));
   }
-  return pass ? 0 : 3;
+  return scores.pass ? 0 : 3;
 }
 }  // namespace
 
