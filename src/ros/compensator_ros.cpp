@@ -484,39 +484,19 @@ void CompensatorRos::diagnosticTimer(const ros::TimerEvent& /*event*/)
   updater_->force_update();
 }
 
-void CompensatorRos::diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat)
+namespace
 {
-  boost::recursive_mutex::scoped_lock lock(mutex_);
+std::uint64_t countSince(std::uint64_t now_count, std::uint64_t prev_count)
+{
+  return now_count - prev_count;
+}
+}  // namespace
+
+void CompensatorRos::diagnoseEvents(const CompensatorCounters& core,
+                                    const std::function<void(std::uint8_t, const std::string&)>& raise) const
+{
   using diagnostic_msgs::DiagnosticStatus;
-  const ros::Time now = ros::Time::now();
-  const CompensatorCounters& core = compensator_->counters();
-  const double interval = (now - diag_prev_time_).toSec();
-
-  std::uint8_t level = DiagnosticStatus::OK;
-  std::vector<std::string> messages;
-  auto raise = [&level, &messages](std::uint8_t l, const std::string& message) {
-    level = std::max(level, l);
-    messages.push_back(message);
-  };
-  auto since = [](std::uint64_t now_count, std::uint64_t prev_count) { return now_count - prev_count; };
-
-  if (counters_.received == 0)
-  {
-    raise(DiagnosticStatus::WARN, "waiting for IMU data on " + imu_sub_.getTopic());
-  }
-  else
-  {
-    const double silence = (now - last_receive_).toSec();
-    if (silence > std::max(2.0, 3.0 * params_.ros.diagnostic_period))
-    {
-      std::ostringstream m;
-      m.precision(1);
-      m << std::fixed << "no IMU data for " << silence << " s";
-      raise(DiagnosticStatus::ERROR, m.str());
-    }
-  }
-  diagnoseInput(now, raise);
-  const std::uint64_t bad_outputs = since(counters_.nonfinite_outputs, diag_wrapper_prev_.nonfinite_outputs);
+  const std::uint64_t bad_outputs = countSince(counters_.nonfinite_outputs, diag_wrapper_prev_.nonfinite_outputs);
   if (bad_outputs > 0)
   {
     raise(DiagnosticStatus::ERROR, std::to_string(bad_outputs) + " non-finite outputs suppressed");
@@ -528,12 +508,12 @@ void CompensatorRos::diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat)
       rejected.push_back(std::to_string(n) + " " + what);
     }
   };
-  count(since(core.rejected_non_finite, diag_core_prev_.rejected_non_finite), "non-finite");
-  count(since(core.rejected_bad_quaternion, diag_core_prev_.rejected_bad_quaternion), "bad quaternion");
-  count(since(core.rejected_duplicate, diag_core_prev_.rejected_duplicate), "duplicate stamp");
-  count(since(core.timing_glitches, diag_core_prev_.timing_glitches), "stamp glitch (early or out of order)");
-  count(since(counters_.rejected_wrong_frame, diag_wrapper_prev_.rejected_wrong_frame), "wrong frame_id");
-  count(since(counters_.rejected_out_of_range, diag_wrapper_prev_.rejected_out_of_range),
+  count(countSince(core.rejected_non_finite, diag_core_prev_.rejected_non_finite), "non-finite");
+  count(countSince(core.rejected_bad_quaternion, diag_core_prev_.rejected_bad_quaternion), "bad quaternion");
+  count(countSince(core.rejected_duplicate, diag_core_prev_.rejected_duplicate), "duplicate stamp");
+  count(countSince(core.timing_glitches, diag_core_prev_.timing_glitches), "stamp glitch (early or out of order)");
+  count(countSince(counters_.rejected_wrong_frame, diag_wrapper_prev_.rejected_wrong_frame), "wrong frame_id");
+  count(countSince(counters_.rejected_out_of_range, diag_wrapper_prev_.rejected_out_of_range),
         "acceleration or angular rate out of range");
   if (!rejected.empty())
   {
@@ -544,22 +524,27 @@ void CompensatorRos::diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat)
     }
     raise(DiagnosticStatus::WARN, joined);
   }
-  if (since(core.resets_backwards, diag_core_prev_.resets_backwards) > 0)
+  if (countSince(core.resets_backwards, diag_core_prev_.resets_backwards) > 0)
   {
     raise(DiagnosticStatus::WARN, "time went backwards: estimator reset");
   }
-  if (since(core.gap_resets, diag_core_prev_.gap_resets) > 0)
+  if (countSince(core.gap_resets, diag_core_prev_.gap_resets) > 0)
   {
     raise(DiagnosticStatus::WARN, "gap in IMU data: integration reset");
   }
-  if (since(core.rate_changes, diag_core_prev_.rate_changes) > 0)
+  if (countSince(core.rate_changes, diag_core_prev_.rate_changes) > 0)
   {
     raise(DiagnosticStatus::WARN, "IMU sample rate changed: period search restarted");
   }
-  if (since(counters_.refused_reconfigures, diag_wrapper_prev_.refused_reconfigures) > 0)
+  if (countSince(counters_.refused_reconfigures, diag_wrapper_prev_.refused_reconfigures) > 0)
   {
     raise(DiagnosticStatus::WARN, "reconfigure refused, previous parameters kept: " + last_refusal_);
   }
+}
+
+void CompensatorRos::diagnoseSetup(const std::function<void(std::uint8_t, const std::string&)>& raise) const
+{
+  using diagnostic_msgs::DiagnosticStatus;
   if (seen_orientation_ && !has_orientation_ && counters_.received > 0)
   {
     const LevelSource source = compensator_->levelSource();
@@ -584,6 +569,41 @@ void CompensatorRos::diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat)
     raise(DiagnosticStatus::WARN, "no transform " + frame_filter_.expected() + " -> " + params_.ros.base_frame +
                                       ": identity mounting assumed");
   }
+}
+
+void CompensatorRos::diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat)
+{
+  boost::recursive_mutex::scoped_lock lock(mutex_);
+  using diagnostic_msgs::DiagnosticStatus;
+  const ros::Time now = ros::Time::now();
+  const CompensatorCounters& core = compensator_->counters();
+  const double interval = (now - diag_prev_time_).toSec();
+
+  std::uint8_t level = DiagnosticStatus::OK;
+  std::vector<std::string> messages;
+  auto raise = [&level, &messages](std::uint8_t l, const std::string& message) {
+    level = std::max(level, l);
+    messages.push_back(message);
+  };
+
+  if (counters_.received == 0)
+  {
+    raise(DiagnosticStatus::WARN, "waiting for IMU data on " + imu_sub_.getTopic());
+  }
+  else
+  {
+    const double silence = (now - last_receive_).toSec();
+    if (silence > std::max(2.0, 3.0 * params_.ros.diagnostic_period))
+    {
+      std::ostringstream m;
+      m.precision(1);
+      m << std::fixed << "no IMU data for " << silence << " s";
+      raise(DiagnosticStatus::ERROR, m.str());
+    }
+  }
+  diagnoseInput(now, raise);
+  diagnoseEvents(core, raise);
+  diagnoseSetup(raise);
   if (counters_.received > 0 && !compensator_->calibrated())
   {
     // Normal at start-up: shown, not raised.
@@ -606,12 +626,21 @@ void CompensatorRos::diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat)
     summary += (i > 0 ? "; " : "") + messages[i];
   }
   stat.summary(level, summary);
+  addDiagnosticValues(stat, core, interval);
 
+  diag_core_prev_ = core;
+  diag_wrapper_prev_ = counters_;
+  diag_prev_time_ = now;
+}
+
+void CompensatorRos::addDiagnosticValues(diagnostic_updater::DiagnosticStatusWrapper& stat,
+                                         const CompensatorCounters& core, double interval) const
+{
   stat.add("mode", toString(compensator_->config().mode));
   stat.add("input topic", imu_sub_.getTopic());
   stat.add("input frame", frame_filter_.known() ? frame_filter_.expected() : std::string("(not seen yet)"));
   stat.addf("input rate [Hz]", "%.2f",
-            interval > 0.0 ? static_cast<double>(since(counters_.received, diag_wrapper_prev_.received)) / interval : 0.0);
+            interval > 0.0 ? static_cast<double>(countSince(counters_.received, diag_wrapper_prev_.received)) / interval : 0.0);
   stat.addf("estimated sample rate [Hz]", "%.2f", core.sample_rate);
   stat.add("received", counters_.received);
   stat.add("accepted", core.accepted);
@@ -667,10 +696,6 @@ void CompensatorRos::diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat)
       stat.add(key, "no period");
     }
   }
-
-  diag_core_prev_ = core;
-  diag_wrapper_prev_ = counters_;
-  diag_prev_time_ = now;
 }
 
 }  // namespace periodic_bias_compensation

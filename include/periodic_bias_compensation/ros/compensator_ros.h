@@ -79,6 +79,13 @@ private:
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat);
   /// The input's own faults for diagnose(): units, output stopped while input arrives.
   void diagnoseInput(const ros::Time& now, const std::function<void(std::uint8_t, const std::string&)>& raise) const;
+  /// What changed since the last diagnose(): samples dropped, resets, refused reconfigures.
+  void diagnoseEvents(const CompensatorCounters& core, const std::function<void(std::uint8_t, const std::string&)>& raise) const;
+  /// Standing conditions: orientation missing, paper-mode periods too short, identity mounting.
+  void diagnoseSetup(const std::function<void(std::uint8_t, const std::string&)>& raise) const;
+  /// The key-value pairs of the status.
+  void addDiagnosticValues(diagnostic_updater::DiagnosticStatusWrapper& stat, const CompensatorCounters& core,
+                           double interval) const;
   void diagnosticTimer(const ros::TimerEvent& event);
 
   // Threading rule: every callback (IMU, services, reconfigure, diagnostics timer) holds mutex_
