@@ -271,7 +271,9 @@ def accuracy(args):
         return
     for path, devel, package in ((ekf, args.robot_localization, 'robot_localization'),
                                  (madgwick, args.imu_tools, 'imu_filter_madgwick')):
-        print('- %s: %s' % (package, '%s, commit %s' % (path, commit_of(devel, package)) if path else
+        # The node inside the given devel folder: no machine's own path in the published tables.
+        print('- %s: %s' % (package, 'DEVEL/%s, commit %s' % (os.path.relpath(path, devel), commit_of(devel, package))
+                            if path else
                             'not measured (no built copy given)'))
     devel = args.robot_localization if ekf else args.imu_tools
     print('- built in the same workspace from: %s' % ', '.join(
@@ -407,9 +409,8 @@ def write_imu_bag(path, t, accel, gyro, quat, orientation=True):
             b.write('imu/data', m, w)
 
 
-def position_track(bag):
-    """Times and positions (slow + wave motion; slow motion) of an estimator's bag, as published
-    (each estimator starts at zero)."""
+def odometry_positions(bag):
+    """{'odometry/filtered' | 'odometry/wave': array of (time, x, y, z)} of an estimator's bag."""
     import numpy as np
     import rosbag
     series = {}
@@ -418,10 +419,18 @@ def position_track(bag):
             if topic.lstrip('/') in ('odometry/filtered', 'odometry/wave'):
                 p = m.pose.pose.position
                 series.setdefault(topic.lstrip('/'), []).append((m.header.stamp.to_sec() - STAMP0, p.x, p.y, p.z))
-    slow = np.array(series['odometry/filtered'])
+    return {topic: np.array(rows) for topic, rows in series.items()}
+
+
+def position_track(bag):
+    """Times and positions (slow + wave motion; slow motion) of an estimator's bag, as published
+    (each estimator starts at zero)."""
+    import numpy as np
+    series = odometry_positions(bag)
+    slow = series['odometry/filtered']
     p = slow[:, 1:].copy()
     if 'odometry/wave' in series:
-        wave = np.array(series['odometry/wave'])
+        wave = series['odometry/wave']
         p = p + np.stack([np.interp(slow[:, 0], wave[:, 0], wave[:, i]) for i in (1, 2, 3)], -1)
     return slow[:, 0], p, slow[:, 1:]
 
@@ -442,18 +451,6 @@ def real_errors(name, data, t, total, slow):
     ref_p = (ref[:, 10:13] - ref[0, 10:13]) / 1000.0
     e = total - np.stack([np.interp(t, ref_t, ref_p[:, i]) for i in range(3)], -1)
     return math.sqrt(np.mean(np.sum(e ** 2, 1))), 'RMS distance from the robot tool position [m]'
-
-
-def wave_track(bag):
-    """Times and positions of an estimator's odometry/wave, or None when it has none."""
-    import numpy as np
-    import rosbag
-    rows = []
-    with rosbag.Bag(bag) as b:
-        for _, m, _ in b.read_messages(topics=['odometry/wave', '/odometry/wave']):
-            p = m.pose.pose.position
-            rows.append((m.header.stamp.to_sec() - STAMP0, p.x, p.y, p.z))
-    return np.array(rows) if rows else None
 
 
 def quat_rotate(quat, v):
@@ -588,7 +585,7 @@ def real(args):
             if name in SPECTRAL_SETS:
                 reference = spectral_displacement(t, accel, quat, SPECTRAL_SETS[name][0])
                 for method in waves:
-                    track = wave_track(waves[method])
+                    track = odometry_positions(waves[method]).get('odometry/wave')
                     if track is not None and 4 * track[:, 1:].std(0).max() >= 1e-3:  # methods with a wave output
                         spectral.extend((name, method) + row for row in spectral_rows(name, reference, track))
             for f in os.listdir(args.work):
