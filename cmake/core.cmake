@@ -14,7 +14,9 @@ add_library(${PROJECT_NAME}_core
   src/core/broadband_wave.cpp
   src/core/harmonic_model.cpp
   src/core/paper_loop.cpp
-  src/core/leveller.cpp)
+  src/core/leveller.cpp
+  src/core/turn_detector.cpp
+  src/core/calibration_window.cpp)
 target_include_directories(${PROJECT_NAME}_core PUBLIC include)
 target_link_libraries(${PROJECT_NAME}_core PUBLIC Eigen3::Eigen PkgConfig::FFTW3 yaml-cpp)
 
@@ -35,6 +37,8 @@ if(CATKIN_ENABLE_TESTING)
     test/core/test_harmonic_model.cpp
     test/core/test_paper_loop.cpp
     test/core/test_leveller.cpp
+    test/core/test_turn_detector.cpp
+    test/core/test_calibration_window.cpp
     test/core/test_real_world_streams.cpp)
   target_link_libraries(test_core ${PROJECT_NAME}_core)
   # test_real_world_streams reads ../shared/data beside the repository when it is there.

@@ -1,10 +1,12 @@
 #include "periodic_bias_compensation/core/compensator.h"
 #include "periodic_bias_compensation/core/broadband_wave.h"
+#include "periodic_bias_compensation/core/calibration_window.h"
 #include "periodic_bias_compensation/core/harmonic_model.h"
 #include "periodic_bias_compensation/core/leveller.h"
 #include "periodic_bias_compensation/core/lever_arm.h"
 #include "periodic_bias_compensation/core/paper_loop.h"
 #include "periodic_bias_compensation/core/parameter_table.h"
+#include "periodic_bias_compensation/core/turn_detector.h"
 
 #include <algorithm>
 #include <cmath>
@@ -30,26 +32,6 @@ constexpr double kResolvePeriods = 10.0;
 constexpr double kFadeTime = 2.0;
 /// Weight below which a fading model is dropped [-].
 constexpr double kFadeEnd = 1e-3;
-/// Yaw rate averaging [s], the averaged rate beyond which the ship turns [rad/s] (wave-induced
-/// yaw of a few degrees at 5-15 s averages to a few mrad/s) and the time after a turn during which
-/// the horizontal axes keep no broadband wave (the spectral FIR spans up to 120 s) [s].
-constexpr double kTurnAveraging = 2.0;
-constexpr double kTurnRate = 0.008;
-constexpr double kAfterTurn = 120.0;
-/// The longer yaw rate mean a turn is told by on a vessel that yaws in waves [s], the time over
-/// which the sea's spread of the 2 s mean about it is measured [s], and how many such spreads
-/// make a turn [-].
-constexpr double kSustainedTurnAveraging = 60.0;
-constexpr double kYawSpreadAveraging = 300.0;
-constexpr double kYawSpreads = 3.0;
-/// Time after a yaw that is no turn during which the horizontal axes keep no broadband wave [s].
-constexpr double kAfterYaw = 5.0;
-/// Heading change after which the vertical spectrum describes another sea (every encounter
-/// frequency moves) [rad], measured on the heading's moving mean of kHeadingAveraging [s]: the
-/// yaw a sea induces (degrees to tens of degrees on a buoy, at its wave periods) averages out
-/// there, a turn does not.
-constexpr double kRecordTurn = 0.35;
-constexpr double kHeadingAveraging = 10.0;
 /// Most Euler steps of the slow-motion observer per sample (stepDefault).
 constexpr int kMaxObserverSteps = 10000;
 /// Highest sample rate planned for [Hz]: a stamp step far below any IMU's period (a driver
@@ -296,7 +278,7 @@ public:
     {
       ++counters_.gap_resets;
       resetMotion();
-      calibration_buffer_.clear();
+      calibration_.clear();
     }
     counters_.held -= time_.heldCount() - 1;
     counters_.accepted += time_.heldCount();
@@ -327,7 +309,7 @@ public:
   {
     planned_rate_ = 0.0;
     leveller_.reset();
-    calibration_buffer_.clear();
+    calibration_.clear();
     if (!bias_from_file_)
     {
       calibrated_ = false;
@@ -352,10 +334,7 @@ public:
     CompensatorOutput output;
     if (needsCalibration())
     {
-      calibration_buffer_.push_back({ s, dt });
-      if (calibration_buffer_.size() == 1)
-        calibration_start_ = s.t;
-      if (s.t - calibration_start_ >= config_.calibration_duration && planned_rate_ > 0.0)
+      if (calibration_.add(s, dt, config_.calibration_duration) && planned_rate_ > 0.0)
       {
         finishCalibration(&output);
       }
@@ -389,7 +368,7 @@ public:
   {
     bias_from_file_ = false;
     calibrated_ = false;
-    calibration_buffer_.clear();
+    calibration_.clear();
   }
 
   bool setConstantBias(const Vector3& bias)
@@ -436,12 +415,6 @@ public:
   }
 
 private:
-  struct BufferedSample
-  {
-    ImuSample sample;
-    double dt;
-  };
-
   static void holdOutput(CompensatorOutput* out)
   {
     out->state = OutputState::kCalibrating;
@@ -514,10 +487,7 @@ private:
   /// Forgets the integrated motion and period search, keeps bias, level and sample rate.
   void resetMotion()
   {
-    turn_rate_ = since_turn_ = sustained_turn_rate_ = yaw_spread_ = yaw_samples_ = 0.0;
-    turn_confirmed_ = false;
-    since_start_ = 0.0;
-    heading_samples_ = 0;
+    turns_.reset();
     for (auto& axis : axes_)
     {
       if (axis.tracker)
@@ -553,36 +523,33 @@ private:
   /// window is processed again with them (only past samples are used: causal).
   void finishCalibration(CompensatorOutput* out)
   {
-    Vector3 mean_force = Vector3::Zero();
     bool any_without_orientation = false;
-    for (const auto& b : calibration_buffer_)
-    {
-      mean_force += b.sample.specific_force;
-      any_without_orientation |= !b.sample.has_orientation;
-    }
-    mean_force /= static_cast<double>(calibration_buffer_.size());
+    const Vector3 mean_force = calibration_.meanSpecificForce(&any_without_orientation);
     leveller_.calibrate(mean_force, any_without_orientation);
 
+    const auto level = [this](const ImuSample& sample) -> Vector3 { return levelAcceleration(sample); };
     std::array<FrequencyEstimate, 3> window_frequency;
     if (!bias_from_file_)
     {
-      std::array<std::vector<double>, 3> level;
-      for (auto& l : level)
-        l.reserve(calibration_buffer_.size());
-      for (const auto& b : calibration_buffer_)
-      {
-        const Vector3 a = levelAcceleration(b.sample);
-        for (int i = 0; i < 3; ++i)
-          level[i].push_back(a[i]);
-      }
+      const std::array<std::vector<double>, 3> axes = calibration_.levelAxes(level);
+      const WindowOffsetOptions options = { config_.assume_static_calibration || config_.mode == Mode::kPaper,
+                                            rate_,
+                                            config_.min_frequency,
+                                            config_.max_frequency,
+                                            config_.min_peak_ratio,
+                                            config_.harmonics };
       for (int i = 0; i < 3; ++i)
-        constant_bias_[i] = windowOffset(level[i], &window_frequency[i]);
+        constant_bias_[i] = windowOffset(axes[i], options, &window_frequency[i]);
     }
     calibrated_ = true;
     for (int i = 0; i < 3; ++i)
       axes_[i].bias = constant_bias_[i];
     if (config_.mode == Mode::kPaper)
-      estimateConstantPositionDrift();
+    {
+      const Vector3 drift = calibration_.constantPositionDrift(level, constant_bias_);
+      for (int i = 0; i < 3; ++i)
+        axes_[i].constant_d_p = drift[i];
+    }
     resetMotion();
     // The window's period is known by now: the replay models it from the first sample on, so
     // that no wave motion leaks into the slow channel while the sliding FFT fills up again.
@@ -592,9 +559,9 @@ private:
         axes_[i].locked = true;
         axes_[i].frequency = window_frequency[i].frequency;
       }
-    for (const auto& b : calibration_buffer_)
+    for (const auto& b : calibration_.samples())
       *out = process(b.sample, b.dt);
-    calibration_buffer_.clear();
+    calibration_.clear();
     // The replay's harmonic models filled over their first period, and the observer took that
     // period's wave as slow motion: its position and velocity restart here, at the first
     // published output (held at zero until now), with the bias it learned.
@@ -606,45 +573,6 @@ private:
       }
   }
 
-  /// Offset of one axis over the calibration window: the mean when the window is at rest (paper
-  /// Sec. 3.1, and paper mode), else the constant of a harmonic fit at the window's dominant
-  /// frequency, so that an oscillation over a non-whole number of periods does not bias it.
-  double windowOffset(const std::vector<double>& values, FrequencyEstimate* frequency) const
-  {
-    double mean = 0.0;
-    for (double v : values)
-      mean += v;
-    mean /= values.size();
-    if (config_.assume_static_calibration || config_.mode == Mode::kPaper || values.size() < 16)
-      return mean;
-    FrequencyTracker tracker(static_cast<int>(values.size()), rate_);
-    for (double v : values)
-      tracker.push(v - mean);
-    *frequency = tracker.analyse(config_.min_frequency, std::min(config_.max_frequency, 0.45 * rate_),
-                                 config_.min_peak_ratio);
-    if (!frequency->locked)
-      return mean;
-    return harmonicConstant(values, rate_, frequency->frequency, config_.harmonics);
-  }
-
-  /// Paper Table 1, "distance bias": after the constant acceleration bias is removed, the mean
-  /// velocity over the at-rest window is a constant position drift per unit time.
-  void estimateConstantPositionDrift()
-  {
-    std::array<double, 3> v{ 0, 0, 0 }, sum{ 0, 0, 0 };
-    for (const auto& b : calibration_buffer_)
-    {
-      const Vector3 a = levelAcceleration(b.sample) - constant_bias_;
-      for (int i = 0; i < 3; ++i)
-      {
-        v[i] += a[i] * b.dt;
-        sum[i] += v[i];
-      }
-    }
-    for (int i = 0; i < 3; ++i)
-      axes_[i].constant_d_p = sum[i] / calibration_buffer_.size();
-  }
-
   CompensatorOutput process(const ImuSample& s, double dt)
   {
     CompensatorOutput out;
@@ -653,21 +581,12 @@ private:
     out.orientation = s.has_orientation ? s.orientation : leveller_.level();
     const LeverArmOutput lever = lever_.update(out.orientation, dt);
     const Vector3 a = levelAcceleration(s);
-    {
-      const double yaw_rate = (out.orientation * s.angular_rate).z();
-      followHeading(out.orientation, dt);
-      followYawRate(yaw_rate, dt);
-      // With one level frame the hull's roll and pitch leak g sin(angle) into the level axes in
-      // the wave band: no horizontal broadband wave then.
-      if (!s.has_orientation)
-        since_turn_ = 0.0;
-    }
+    turns_.update(headingOf(out.orientation), (out.orientation * s.angular_rate).z(), dt, s.has_orientation);
 
     // Until the window ends the bias is provisional: the running mean of the level acceleration.
     if (!calibrated_ && config_.enable_constant)
     {
-      provisional_sum_ = calibration_buffer_.size() <= 1 ? a : provisional_sum_ + a;
-      const Vector3 provisional = provisional_sum_ / std::max<std::size_t>(1, calibration_buffer_.size());
+      const Vector3 provisional = calibration_.provisionalBias(a);
       for (int i = 0; i < 3; ++i)
         axes_[i].bias = provisional[i];
     }
@@ -803,58 +722,9 @@ private:
     }
   }
 
-  /// Yaw for the horizontal axes (after followHeading). The 2 s mean yaw rate beyond kTurnRate
-  /// and beyond kYawSpreads times the spread the sea gives it (its deviation from the
-  /// kSustainedTurnAveraging mean, over kYawSpreadAveraging) holds their broadband share off
-  /// while it lasts and kAfterYaw after; once the heading's mean has moved kRecordTurn (a turn,
-  /// not a yaw the sea induces), kAfterTurn after, as after the start. A vessel that yaws by
-  /// degrees in waves (a buoy) keeps its share; a steady turn raises the spread to about 0.2 of
-  /// its rate.
-  void followYawRate(double yaw_rate, double dt)
-  {
-    const auto weight = [dt](double time_constant) { return dt > 0.0 ? std::min(1.0, dt / time_constant) : 0.0; };
-    turn_rate_ += weight(kTurnAveraging) * (yaw_rate - turn_rate_);
-    sustained_turn_rate_ += weight(kSustainedTurnAveraging) * (yaw_rate - sustained_turn_rate_);
-    const double deviation = turn_rate_ - sustained_turn_rate_;
-    yaw_samples_ += 1.0;
-    yaw_spread_ += std::max(weight(kYawSpreadAveraging), 1.0 / yaw_samples_) * (deviation * deviation - yaw_spread_);
-    const double threshold = std::max(kTurnRate, kYawSpreads * std::sqrt(yaw_spread_));
-    since_turn_ = std::abs(turn_rate_) > threshold || heading_turned_ ? 0.0 : since_turn_ + dt;
-    since_start_ += dt;
-    if (heading_turned_)
-      turn_confirmed_ = true;
-    else if (since_turn_ >= kAfterTurn)
-      turn_confirmed_ = false;
-  }
-
-  /// Follows the heading's moving mean; heading_turned_ marks the sample at which it has moved
-  /// kRecordTurn from where the vertical spectrum record began (which then begins anew there).
-  void followHeading(const Eigen::Quaterniond& orientation, double dt)
-  {
-    const Eigen::Matrix3d rotation = orientation.toRotationMatrix();
-    const double heading = std::atan2(rotation(1, 0), rotation(0, 0));
-    heading_turned_ = false;
-    if (heading_samples_++ == 0)
-    {
-      heading_ = heading_mean_ = record_heading_ = heading;
-      return;
-    }
-    heading_ += std::remainder(heading - heading_, 2.0 * M_PI);
-    const double weight = std::max(dt > 0.0 ? 1.0 - std::exp(-dt / kHeadingAveraging) : 0.0,
-                                   1.0 / static_cast<double>(heading_samples_));
-    heading_mean_ += weight * (heading_ - heading_mean_);
-    if (std::abs(heading_mean_ - record_heading_) > kRecordTurn)
-    {
-      heading_turned_ = true;
-      record_heading_ = heading_mean_;
-    }
-  }
-
   /// Default mode with heave_filter: the broadband wave estimate of axis i (BroadbandWave),
-  /// blended into the harmonic model's wave output by its share. A horizontal axis may take a
-  /// share only when the ship has not turned for kAfterTurn (a turn's centripetal acceleration
-  /// lies at the wave band's lower edge; followYawRate) and the sample had an attitude (with one level frame
-  /// the roll leaks g sin(roll) into the level axes in the wave band).
+  /// blended into the harmonic model's wave output by its share. A horizontal axis takes a share
+  /// only when the TurnDetector allows it.
   BroadbandWaveOutput broadbandWave(AxisEstimator& axis, int i, double raw, double residual, double dt,
                                     double* wave_a, double* wave_x, double* wave_v)
   {
@@ -866,8 +736,8 @@ private:
     in.residual = residual;
     in.harmonic_position = *wave_x;
     in.locked = axis.locked;
-    in.allowed = since_start_ >= kAfterTurn && since_turn_ >= (turn_confirmed_ ? kAfterTurn : kAfterYaw);
-    in.turning = heading_turned_;
+    in.allowed = turns_.horizontalShareAllowed();
+    in.turning = turns_.turned();
     in.dt = dt;
     in.rate = rate_;
     const BroadbandWaveOutput out = axis.broadband.update(in);
@@ -1080,19 +950,7 @@ private:
   int hop_samples_ = 1;
   int since_analysis_ = 0;
   double now_ = 0.0;  ///< time of the sample being processed [s]
-  double turn_rate_ = 0.0;     ///< level-frame yaw rate averaged over kTurnAveraging [rad/s]
-  double sustained_turn_rate_ = 0.0;  ///< averaged over kSustainedTurnAveraging [rad/s]
-  double yaw_spread_ = 0.0;    ///< mean square of turn_rate_ less sustained_turn_rate_ [rad^2/s^2]
-  double yaw_samples_ = 0.0;   ///< samples in yaw_spread_'s mean
-  bool turn_confirmed_ = false;  ///< the heading moved kRecordTurn since the share was last allowed
-  double since_start_ = 0.0;     ///< time since the motion (re)started [s]
-  double since_turn_ = 0.0;    ///< time since it last exceeded kTurnRate, or since the last
-                               ///< sample without an attitude [s]
-  long heading_samples_ = 0;     ///< since the heading mean started
-  double heading_ = 0.0;         ///< last heading, unwrapped [rad]
-  double heading_mean_ = 0.0;    ///< its moving mean over kHeadingAveraging [rad]
-  double record_heading_ = 0.0;  ///< heading_mean_ when the vertical spectrum record began [rad]
-  bool heading_turned_ = false;  ///< this sample's heading mean left record_heading_ by kRecordTurn
+  TurnDetector turns_;  ///< turns told from the yaw a sea induces (wave estimate)
 
   Leveller leveller_;
   LeverArm lever_;  ///< the IMU's offset taken off the wave outputs
@@ -1100,9 +958,7 @@ private:
   bool calibrated_ = false;
   bool bias_from_file_ = false;
   Vector3 constant_bias_ = Vector3::Zero();
-  Vector3 provisional_sum_ = Vector3::Zero();
-  double calibration_start_ = 0.0;
-  std::vector<BufferedSample> calibration_buffer_;
+  CalibrationWindow calibration_;
 };
 
 Compensator::Compensator(const CompensatorConfig& config) : impl_(std::make_unique<CompensatorImpl>(config))

@@ -1,0 +1,86 @@
+// Turns told from the yaw a sea induces (estimation core, no ROS).
+//
+// The wave estimate asks two things of the heading:
+// - Has the ship turned? Then every encounter frequency has moved and the vertical spectrum
+//   record describes another sea: it begins anew. A turn is a change of the heading's moving mean
+//   (kHeadingAveraging) by kRecordTurn; the yaw a sea induces (degrees to tens of degrees on a
+//   buoy, at its wave periods) averages out there, a turn does not.
+// - May the horizontal axes take a broadband wave share? A turn's centripetal acceleration lies
+//   at the wave band's lower edge, so not while the ship turns. The 2 s mean yaw rate beyond
+//   kTurnRate and beyond kYawSpreads times the spread the sea gives it (its deviation from the
+//   kSustainedTurnAveraging mean, over kYawSpreadAveraging) holds the share off while it lasts
+//   and kAfterYaw after; after a heading change (a turn, not a yaw of the sea) and after the
+//   start, kAfterTurn (the spectral FIR spans up to that). A vessel that yaws by degrees in waves
+//   keeps its share; a steady turn raises the spread to about 0.2 of its rate. Without a measured
+//   attitude (one level frame) the share stays off: the hull's roll and pitch leak g sin(angle)
+//   into the level axes in the wave band.
+//
+// Threading: not thread-safe; the owner serialises calls.
+#pragma once
+
+#include <Eigen/Geometry>
+
+namespace periodic_bias_compensation
+{
+/// Heading of an attitude (body -> level frame, z up): the yaw of its x axis about z [rad],
+/// in (-pi, pi].
+double headingOf(const Eigen::Quaterniond& orientation);
+
+class TurnDetector
+{
+public:
+  /// Averaging of the yaw rate a turn is told by [s], and the rate beyond which the ship turns
+  /// [rad/s] (wave-induced yaw of a few degrees at 5-15 s averages to a few mrad/s).
+  static constexpr double kTurnAveraging = 2.0;
+  static constexpr double kTurnRate = 0.008;
+  /// Time after a turn, and after the start, without a horizontal share [s].
+  static constexpr double kAfterTurn = 120.0;
+  /// The longer yaw rate mean a turn is told by on a vessel that yaws in waves [s], the time over
+  /// which the sea's spread of the 2 s mean about it is measured [s], and how many such spreads
+  /// make a turn [-].
+  static constexpr double kSustainedTurnAveraging = 60.0;
+  static constexpr double kYawSpreadAveraging = 300.0;
+  static constexpr double kYawSpreads = 3.0;
+  /// Time after a yaw that is no turn without a horizontal share [s].
+  static constexpr double kAfterYaw = 5.0;
+  /// Heading change of the moving mean that makes a turn [rad], and that mean's time constant [s].
+  static constexpr double kRecordTurn = 0.35;
+  static constexpr double kHeadingAveraging = 10.0;
+
+  /// Forgets everything: the next sample is the first.
+  void reset();
+  /// One sample. heading: headingOf() the attitude [rad]; yaw_rate: the angular rate about the
+  /// level frame's z [rad/s]; dt: since the previous sample [s] (0 for the first);
+  /// attitude_measured: the sample came with an attitude (not one level frame).
+  void update(double heading, double yaw_rate, double dt, bool attitude_measured);
+
+  /// This sample's heading mean has moved kRecordTurn from where the last record began (which
+  /// then begins anew here).
+  bool turned() const
+  {
+    return turned_;
+  }
+  /// The horizontal axes may take a broadband wave share.
+  bool horizontalShareAllowed() const
+  {
+    return since_start_ >= kAfterTurn && since_turn_ >= (turn_confirmed_ ? kAfterTurn : kAfterYaw);
+  }
+
+private:
+  void followHeading(double heading, double dt);
+  void followYawRate(double yaw_rate, double dt);
+
+  double turn_rate_ = 0.0;            ///< yaw rate averaged over kTurnAveraging [rad/s]
+  double sustained_turn_rate_ = 0.0;  ///< averaged over kSustainedTurnAveraging [rad/s]
+  double yaw_spread_ = 0.0;           ///< mean square of turn_rate_ less sustained_turn_rate_ [rad^2/s^2]
+  double yaw_samples_ = 0.0;          ///< samples in yaw_spread_'s mean
+  bool turn_confirmed_ = false;       ///< the heading turned since the share was last allowed
+  double since_start_ = 0.0;          ///< time since the first sample [s]
+  double since_turn_ = 0.0;           ///< time since the last turn or yaw beyond the threshold [s]
+  long heading_samples_ = 0;          ///< samples in the heading mean
+  double heading_ = 0.0;              ///< last heading, unwrapped [rad]
+  double heading_mean_ = 0.0;         ///< its moving mean over kHeadingAveraging [rad]
+  double record_heading_ = 0.0;       ///< heading_mean_ when the current record began [rad]
+  bool turned_ = false;
+};
+}  // namespace periodic_bias_compensation
