@@ -50,7 +50,8 @@ BroadbandWaveOutput BroadbandWave::update(const BroadbandWaveInput& in)
     spectral_.restartRecord();
   const WienerHeaveOutput spectral = spectral_.update(in.offset_free, dt, density);
   if (dt > 0.0)
-    spectral_share_ += (1.0 - std::exp(-dt / WienerHeave::kDesignFade)) * ((spectral.valid ? 1.0 : 0.0) - spectral_share_);
+    spectral_share_ +=
+        (1.0 - std::exp(-dt / WienerHeave::kDesignFade)) * ((spectral.valid ? 1.0 : 0.0) - spectral_share_);
   out.position_variance = fixed_.positionVariance(density);
   out.velocity_variance = fixed_.velocityVariance(density);
   if (spectral_share_ > 0.0)

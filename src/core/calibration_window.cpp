@@ -6,8 +6,7 @@
 
 namespace periodic_bias_compensation
 {
-double windowOffset(const std::vector<double>& values, const WindowOffsetOptions& options,
-                    FrequencyEstimate* frequency)
+double windowOffset(const std::vector<double>& values, const WindowOffsetOptions& options, FrequencyEstimate* frequency)
 {
   double mean = 0.0;
   for (double v : values)

@@ -189,8 +189,7 @@ public:
       return false;
     const bool restart_search = config.mode != config_.mode || config.fft_window != config_.fft_window ||
                                 config.min_frequency != config_.min_frequency ||
-                                config.max_frequency != config_.max_frequency ||
-                                config.harmonics != config_.harmonics;
+                                config.max_frequency != config_.max_frequency || config.harmonics != config_.harmonics;
     const bool restart_heave = config.heave_filter != config_.heave_filter ||
                                config.heave_corner_frequency != config_.heave_corner_frequency ||
                                config.min_frequency != config_.min_frequency;
@@ -470,8 +469,8 @@ private:
     const int table = std::max(4, static_cast<int>(std::ceil(rate / config_.min_frequency)) + 2);
     // The period search needs rate / M >= 5 x max_frequency, not the IMU's rate: at 100 Hz and
     // 2 Hz the transform is 10 times shorter (docs/algorithm.md, "Period search").
-    const int decimation = std::clamp(static_cast<int>(rate / (kDecimatedRateFactor * config_.max_frequency)), 1,
-                                      window / 16);
+    const int decimation =
+        std::clamp(static_cast<int>(rate / (kDecimatedRateFactor * config_.max_frequency)), 1, window / 16);
     for (auto& axis : axes_)
     {
       axis.tracker = std::make_unique<FrequencyTracker>(window, rate, decimation);
@@ -599,7 +598,8 @@ private:
     for (int i = 0; i < 3; ++i)
     {
       AxisEstimator& axis = axes_[i];
-      const double bias = config_.enable_constant ? (config_.mode == Mode::kPaper && calibrated_ ? constant_bias_[i] : axis.bias) : 0.0;
+      const double bias =
+          config_.enable_constant ? (config_.mode == Mode::kPaper && calibrated_ ? constant_bias_[i] : axis.bias) : 0.0;
       const double compensated = a[i] - bias;
       axis.time_since_reset += dt;
       if (axis.tracker)
@@ -607,7 +607,10 @@ private:
         // Default mode: less the calibrated offset only, as the harmonic model (the drift
         // observer's bias follows acceleration up to about 1 / (2 pi drift_time_constant), and
         // taking it off would shape the spectrum there).
-        axis.tracker->push(config_.mode == Mode::kDefault ? a[i] - (calibrated_ && config_.enable_constant ? constant_bias_[i] : 0.0) : compensated, s.t);
+        axis.tracker->push(config_.mode == Mode::kDefault
+                               ? a[i] - (calibrated_ && config_.enable_constant ? constant_bias_[i] : 0.0)
+                               : compensated,
+                           s.t);
         if (analyse && config_.enable_periodic)
           updateFrequency(axis);
       }
@@ -649,9 +652,10 @@ private:
     const int recent = static_cast<int>(kRecentFftWindow * rate_);
     int span_samples = std::min(axis.tracker->samples(), recent);
     const FrequencyEstimate estimate =
-        config_.mode == Mode::kPaper ?
-            axis.tracker->analyse(config_.min_frequency, f_max, config_.min_peak_ratio, recent) :
-            axis.tracker->analyseFreshest(config_.min_frequency, f_max, config_.min_peak_ratio, recent, &span_samples);
+        config_.mode == Mode::kPaper
+            ? axis.tracker->analyse(config_.min_frequency, f_max, config_.min_peak_ratio, recent)
+            : axis.tracker->analyseFreshest(config_.min_frequency, f_max, config_.min_peak_ratio, recent,
+                                            &span_samples);
     const double span = span_samples / rate_;
     // Only estimates over a span that no longer grows go into the drift regression.
     const bool whole_span = axis.tracker->full() || span_samples < axis.tracker->samples();
@@ -725,8 +729,8 @@ private:
   /// Default mode with heave_filter: the broadband wave estimate of axis i (BroadbandWave),
   /// blended into the harmonic model's wave output by its share. A horizontal axis takes a share
   /// only when the TurnDetector allows it.
-  BroadbandWaveOutput broadbandWave(AxisEstimator& axis, int i, double raw, double residual, double dt,
-                                    double* wave_a, double* wave_x, double* wave_v)
+  BroadbandWaveOutput broadbandWave(AxisEstimator& axis, int i, double raw, double residual, double dt, double* wave_a,
+                                    double* wave_x, double* wave_v)
   {
     BroadbandWaveInput in;
     in.raw = raw;
@@ -768,7 +772,8 @@ private:
     const double step = 2.0 * M_PI * axis.frequency / rate_;
     const double lambda = std::exp(-1.0 / (rate_ * config_.harmonic_memory));
     const int period = static_cast<int>(std::ceil(rate_ / axis.frequency));
-    const int count = std::min(axis.raw_history.size(), std::max(period, static_cast<int>(rate_ * config_.harmonic_memory)));
+    const int count =
+        std::min(axis.raw_history.size(), std::max(period, static_cast<int>(rate_ * config_.harmonic_memory)));
     // The newest kept sample (lag 1) is the previous one, at phase 0.
     for (int lag = count; lag >= 1; --lag)
       axis.harmonic.update(-(lag - 1) * step, axis.raw_history.ago(lag), lambda);
@@ -820,10 +825,9 @@ private:
       // frequency is extrapolated from there to now.
       // Bounded: a noisy slope extrapolated over a long window must never take the frequency
       // towards zero, where the displacement (divided by omega^2) would explode.
-      const double frequency =
-          std::clamp(axis.frequency + axis.frequency_slope * (now_ - axis.frequency_time),
-                     std::max(config_.min_frequency, (1.0 - kMaxExtrapolation) * axis.frequency),
-                     (1.0 + kMaxExtrapolation) * axis.frequency);
+      const double frequency = std::clamp(axis.frequency + axis.frequency_slope * (now_ - axis.frequency_time),
+                                          std::max(config_.min_frequency, (1.0 - kMaxExtrapolation) * axis.frequency),
+                                          (1.0 + kMaxExtrapolation) * axis.frequency);
       const double omega = 2.0 * M_PI * frequency;
       axis.phase = std::fmod(axis.phase + omega * dt, 2.0 * M_PI);
       const double lambda = std::exp(-dt / config_.harmonic_memory);
@@ -905,8 +909,8 @@ private:
     // The blend's variance (broadbandWave), errors taken as independent.
     const double harmonic_share = (1.0 - broadband.weight) * (1.0 - broadband.weight);
     const double broadband_share = broadband.weight * broadband.weight;
-    out->wave_position_variance[i] = harmonic_share * axis.residual_variance * variance_factor +
-                                     broadband_share * broadband.position_variance;
+    out->wave_position_variance[i] =
+        harmonic_share * axis.residual_variance * variance_factor + broadband_share * broadband.position_variance;
     out->wave_velocity_variance[i] = harmonic_share * axis.residual_variance * velocity_variance_factor +
                                      broadband_share * broadband.velocity_variance;
   }
@@ -941,15 +945,15 @@ private:
   CompensatorCounters counters_;
   std::array<AxisEstimator, 3> axes_;
   TimeBase time_;
-  double mean_force_ = 0.0;   ///< mean |specific force| (noteSpecificForce) [m/s^2]
-  double force_time_ = 0.0;   ///< data behind it [s]
+  double mean_force_ = 0.0;  ///< mean |specific force| (noteSpecificForce) [m/s^2]
+  double force_time_ = 0.0;  ///< data behind it [s]
   double force_samples_ = 0.0;
   std::array<ImuSample, kConfirmSamples> held_;  ///< samples held while a jump is confirmed
-  double rate_ = 0.0;          ///< sample rate [Hz] (time_)
-  double planned_rate_ = 0.0;  ///< rate the FFT windows were planned for [Hz]
+  double rate_ = 0.0;                            ///< sample rate [Hz] (time_)
+  double planned_rate_ = 0.0;                    ///< rate the FFT windows were planned for [Hz]
   int hop_samples_ = 1;
   int since_analysis_ = 0;
-  double now_ = 0.0;  ///< time of the sample being processed [s]
+  double now_ = 0.0;    ///< time of the sample being processed [s]
   TurnDetector turns_;  ///< turns told from the yaw a sea induces (wave estimate)
 
   Leveller leveller_;

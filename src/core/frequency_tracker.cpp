@@ -217,8 +217,8 @@ FrequencyEstimate FrequencyTracker::analyse(double f_min, double f_max, double m
   estimate.amplitude = 2.0 * std::sqrt(plan_->power[k_peak]) / window_sum;
   // A band-edge bin lower than its neighbour outside the band is the skirt of a line below the
   // band (a period that does not fit three times in the data yet), not a peak.
-  const bool local_maximum = plan_->power[k_peak] >= plan_->power[k_peak - 1] &&
-                             plan_->power[k_peak] >= plan_->power[k_peak + 1];
+  const bool local_maximum =
+      plan_->power[k_peak] >= plan_->power[k_peak - 1] && plan_->power[k_peak] >= plan_->power[k_peak + 1];
   estimate.locked = local_maximum && estimate.peak_ratio >= min_peak_ratio && estimate.frequency >= f_lo &&
                     estimate.frequency <= f_max;
   return estimate;

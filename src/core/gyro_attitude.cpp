@@ -110,8 +110,7 @@ const Eigen::Quaterniond& GyroAttitude::update(const Eigen::Vector3d& angular_ra
   return attitude_;
 }
 
-void GyroAttitude::watchQuiet(const Eigen::Vector3d& angular_rate, const Eigen::Vector3d& specific_force,
-                              double dt)
+void GyroAttitude::watchQuiet(const Eigen::Vector3d& angular_rate, const Eigen::Vector3d& specific_force, double dt)
 {
   block_sum_.rate += angular_rate;
   block_sum_.force += specific_force;
@@ -162,8 +161,8 @@ void GyroAttitude::start(const Eigen::Vector3d& angular_rate, const Eigen::Vecto
   if (w.elapsed < kStartWindow)
     return;
   const double n = std::max(1.0, w.count - 1.0);
-  const bool at_rest = (w.rate_m2 / n).cwiseSqrt().maxCoeff() < kStaticRateSpread &&
-                       std::sqrt(w.magnitude_m2 / n) < kStaticForceSpread;
+  const bool at_rest =
+      (w.rate_m2 / n).cwiseSqrt().maxCoeff() < kStaticRateSpread && std::sqrt(w.magnitude_m2 / n) < kStaticForceSpread;
   // Roll and pitch that turn the measured "up" onto z; yaw zero. At rest the window's mean
   // force is up and its mean rate the gyro bias (a consumer gyro's few degrees per second would
   // otherwise tilt the estimate by radians before the bias loop caught up); in motion, the newest

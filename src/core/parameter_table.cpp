@@ -101,7 +101,8 @@ std::string describeAccepted(const ParameterInfo& info)
     case ParameterType::kInt:
     case ParameterType::kDouble:
       return toString(info.range);
-    case ParameterType::kString: {
+    case ParameterType::kString:
+    {
       std::string choices;
       for (const ParameterChoice& choice : info.choices)
         choices += (choices.empty() ? "" : ", ") + choice.value;
@@ -225,7 +226,7 @@ void addGains(ParameterTable<C>* table)
                    alpha ? "the comb loop is unstable from 2 on" : "larger values make the loop oscillate and diverge");
       const auto field = term.field;
       table->push_back(makeParameter<double, C>(
-          i, [axis, field](auto& config) -> auto& { return config.gains[axis].*field; }));
+          i, [ axis, field ](auto& config) -> auto& { return config.gains[axis].*field; }));
     }
 }
 
@@ -233,12 +234,13 @@ void addLeverArm(ParameterTable<C>* table)
 {
   for (int axis = 0; axis < 3; ++axis)
   {
-    ParameterInfo i = makeInfo(std::string("lever_arm_") + kAxisNames[axis], Reconfigure::kRuntime, "m",
-                               std::string("position of the IMU from the point the odometry describes, ") + kAxisNames[axis] +
-                                   " in the base frame (the wave part of its tilt is taken off odometry/wave; default mode)",
-                               closed(-100.0, 100.0), "beyond the size of a ship");
-    table->push_back(
-        makeParameter<double, C>(i, [axis](auto& config) -> auto& { return config.lever_arm[axis]; }));
+    ParameterInfo i =
+        makeInfo(std::string("lever_arm_") + kAxisNames[axis], Reconfigure::kRuntime, "m",
+                 std::string("position of the IMU from the point the odometry describes, ") + kAxisNames[axis] +
+                     " in the base frame (the wave part of its tilt is taken off odometry/wave; default mode)",
+                 closed(-100.0, 100.0), "beyond the size of a ship");
+    table->push_back(makeParameter<double, C>(
+        i, [axis](auto& config) -> auto& { return config.lever_arm[axis]; }));
   }
 }
 }  // namespace

@@ -148,9 +148,9 @@ void TimeBase::noteStep(double dt)
   }
   // A new rate once three quarters of the recent steps agree on it (not while the steps of two
   // rates are mixed: their median lies between them).
-  const int agreeing = static_cast<int>(std::count_if(recent_.begin(), recent_.begin() + recent_count_, [&](double step) {
-    return std::abs(step - typical) <= kRateChange * typical;
-  }));
+  const int agreeing =
+      static_cast<int>(std::count_if(recent_.begin(), recent_.begin() + recent_count_,
+                                     [&](double step) { return std::abs(step - typical) <= kRateChange * typical; }));
   if (std::abs(typical - period_) > kRateChange * period_ && 4 * agreeing >= 3 * recent_count_)
   {
     ++rate_changes_;

@@ -33,8 +33,8 @@ void TurnDetector::followHeading(double heading, double dt)
     return;
   }
   heading_ += std::remainder(heading - heading_, 2.0 * M_PI);
-  const double weight = std::max(dt > 0.0 ? 1.0 - std::exp(-dt / kHeadingAveraging) : 0.0,
-                                 1.0 / static_cast<double>(heading_samples_));
+  const double weight =
+      std::max(dt > 0.0 ? 1.0 - std::exp(-dt / kHeadingAveraging) : 0.0, 1.0 / static_cast<double>(heading_samples_));
   heading_mean_ += weight * (heading_ - heading_mean_);
   if (std::abs(heading_mean_ - record_heading_) > kRecordTurn)
   {

@@ -285,8 +285,8 @@ void WienerHeave::design(double noise_density_squared)
   };
   std::vector<double> autocorrelation = correlation([&](int k) { return std::complex<double>(density[k] * df); });
   std::vector<double> r_position = correlation([&](int k) { return cross[k] * df; });
-  std::vector<double> r_velocity = correlation(
-      [&](int k) { return std::complex<double>(0.0, 2.0 * M_PI * k * df) * cross[k] * df; });
+  std::vector<double> r_velocity =
+      correlation([&](int k) { return std::complex<double>(0.0, 2.0 * M_PI * k * df) * cross[k] * df; });
   auto next = std::make_shared<Design>();
   if (!solveToeplitz(autocorrelation, r_position, &next->position) ||
       !solveToeplitz(autocorrelation, r_velocity, &next->velocity))

@@ -117,7 +117,8 @@ std::map<std::string, Column> parseColumns(const CsvOptions& o, const std::vecto
       throw CsvOptionError(std::string("--columns needs ") + key + " (keys: " + kValidKeys + ")");
   if (!columns.count("t") && !(o.rate > 0.0))
     throw CsvOptionError("without a t column, --rate is required");
-  const auto truth = std::count_if(kTruthKeys.begin(), kTruthKeys.end(), [&](const char* k) { return columns.count(k) > 0; });
+  const auto truth =
+      std::count_if(kTruthKeys.begin(), kTruthKeys.end(), [&](const char* k) { return columns.count(k) > 0; });
   if (truth != 0 && truth != static_cast<long>(kTruthKeys.size()))
     throw CsvOptionError("--columns: truth needs all of px,py,pz,qw,qx,qy,qz");
   return columns;
@@ -165,8 +166,8 @@ char detectDelimiter(const std::string& header)
     else if (!quoted && count.count(c))
       ++count[c];
   }
-  const auto best = std::max_element(count.begin(), count.end(),
-                                     [](const auto& a, const auto& b) { return a.second < b.second; });
+  const auto best =
+      std::max_element(count.begin(), count.end(), [](const auto& a, const auto& b) { return a.second < b.second; });
   return best->second > 0 ? best->first : ' ';
 }
 
@@ -231,7 +232,9 @@ Recording readCsv(const CsvOptions& o)
   if (rows.size() < kMinDataLines)
     throw std::runtime_error(o.path + ": only " + std::to_string(rows.size()) + " data lines (at least " +
                              std::to_string(kMinDataLines) + " needed; delimiter '" +
-                             (separator == '\t' ? std::string("tab") : separator == ' ' ? "blanks" : std::string(1, separator)) +
+                             (separator == '\t'  ? std::string("tab")
+                              : separator == ' ' ? "blanks"
+                                                 : std::string(1, separator)) +
                              "')");
   r.data.resize(static_cast<Eigen::Index>(rows.size()), kChannels);
   for (std::size_t i = 0; i < rows.size(); ++i)

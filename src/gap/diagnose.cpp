@@ -70,8 +70,8 @@ std::string departureJson(const Departure& d)
   std::ostringstream o;
   o << "{\"axis\": " << str(d.where.channel) << ", \"quantity\": " << str(d.where.quantity)
     << ", \"range\": " << str(d.where.range) << ", \"segment\": " << str(d.where.segment)
-    << ", \"stage\": " << str(d.where.stage) << ", \"real\": " << num(d.real) << ", \"sim_median\": " << num(d.sim_median)
-    << ", \"size_z\": " << num(d.z) << "}";
+    << ", \"stage\": " << str(d.where.stage) << ", \"real\": " << num(d.real)
+    << ", \"sim_median\": " << num(d.sim_median) << ", \"size_z\": " << num(d.z) << "}";
   return o.str();
 }
 
@@ -780,9 +780,9 @@ namespace
 std::string motionSummaryJson(const MotionSummary& m)
 {
   std::ostringstream o;
-  o << "{\"roll\": " << num(m.roll) << ", \"pitch\": " << num(m.pitch) << ", \"heading\": "
-    << (std::isfinite(m.heading) ? num(m.heading) : std::string("null")) << ", \"wave_height\": " << num(m.wave_height)
-    << ", \"peak_period\": " << num(m.peak_period) << "}";
+  o << "{\"roll\": " << num(m.roll) << ", \"pitch\": " << num(m.pitch)
+    << ", \"heading\": " << (std::isfinite(m.heading) ? num(m.heading) : std::string("null"))
+    << ", \"wave_height\": " << num(m.wave_height) << ", \"peak_period\": " << num(m.peak_period) << "}";
   return o.str();
 }
 
@@ -807,7 +807,8 @@ std::string reportJson(const Report& r)
     << ", \"duration_s\": " << num(r.duration) << ", \"samples\": " << r.samples << "},\n";
   o << "  \"scenario\": " << str(r.scenario_name) << ",\n";
   o << "  \"motion\": " << motionJson(r.motion) << ",\n";
-  o << "  \"gap_metric\": \"rms over features of log(1 + max(0, |z| - 3)), z = (real - ensemble median) / ensemble spread\",\n";
+  o << "  \"gap_metric\": \"rms over features of log(1 + max(0, |z| - 3)), z = (real - ensemble median) / ensemble "
+       "spread\",\n";
   o << "  \"gap_all\": " << num(r.gap_all) << ", \"null_gap_all\": " << num(r.null_gap) << ",\n";
   o << "  \"where\": [";
   for (std::size_t i = 0; i < r.where.size(); ++i)
@@ -819,20 +820,21 @@ std::string reportJson(const Report& r)
   for (std::size_t i = 0; i < r.direct.size(); ++i)
   {
     o << (i ? ",\n    " : "\n    ") << "{\"effect\": " << str(r.direct[i].effect)
-      << ", \"detected\": " << (r.direct[i].detected ? "true" : "false") << ", \"evidence\": " << str(r.direct[i].evidence)
-      << "}";
+      << ", \"detected\": " << (r.direct[i].detected ? "true" : "false")
+      << ", \"evidence\": " << str(r.direct[i].evidence) << "}";
   }
   o << "\n  ],\n";
   o << "  \"withheld\": {\"gap_before\": " << num(r.gap_before) << ", \"null_gap\": " << num(r.null_gap_held)
-    << ", \"null_gap_typical\": " << num(r.null_gap_typical)
-    << ", \"max_z\": " << num(r.max_z_held) << ", \"null_max_z\": " << num(r.null_max_z_held) << "},\n";
+    << ", \"null_gap_typical\": " << num(r.null_gap_typical) << ", \"max_z\": " << num(r.max_z_held)
+    << ", \"null_max_z\": " << num(r.null_max_z_held) << "},\n";
   o << "  \"ranking\": [";
   for (std::size_t i = 0; i < r.ranking.size(); ++i)
   {
     const Candidate& c = r.ranking[i];
-    o << (i ? ",\n    " : "\n    ") << "{\"effect\": " << str(c.effect) << ", \"params\": " << (c.params_json.empty() ? "{}" : c.params_json)
-      << ", \"gap_before\": " << num(c.gap_before) << ", \"gap_after\": " << num(c.gap_after)
-      << ", \"shrink\": " << num(c.shrink) << ", \"fit\": " << str(c.note) << "}";
+    o << (i ? ",\n    " : "\n    ") << "{\"effect\": " << str(c.effect)
+      << ", \"params\": " << (c.params_json.empty() ? "{}" : c.params_json) << ", \"gap_before\": " << num(c.gap_before)
+      << ", \"gap_after\": " << num(c.gap_after) << ", \"shrink\": " << num(c.shrink) << ", \"fit\": " << str(c.note)
+      << "}";
   }
   o << "\n  ],\n";
   o << "  \"verdict\": {\"effect\": " << str(r.verdict_effect) << ", \"params\": " << r.verdict_params
@@ -862,21 +864,23 @@ std::string reportSummary(const Report& r)
   std::snprintf(buf, sizeof(buf), "diagnose_gap: %s vs scenario '%s': %zu samples, %.6g Hz, %.1f s\n",
                 r.real_source.c_str(), r.scenario_name.c_str(), r.samples, r.rate, r.duration);
   o << buf;
-  std::snprintf(buf, sizeof(buf), "MOTION: %s; fitted: %s (withheld gap %.3g against the scenario as given, %.3g fitted)\n",
-                r.motion.differs ? "differs" : "as the scenario's", r.motion.adopted.empty() ? "nothing" : r.motion.adopted.c_str(),
-                r.motion.gap_before, r.motion.gap_after);
+  std::snprintf(
+      buf, sizeof(buf), "MOTION: %s; fitted: %s (withheld gap %.3g against the scenario as given, %.3g fitted)\n",
+      r.motion.differs ? "differs" : "as the scenario's",
+      r.motion.adopted.empty() ? "nothing" : r.motion.adopted.c_str(), r.motion.gap_before, r.motion.gap_after);
   o << buf;
   for (const std::string& finding : r.motion.findings)
     o << "  " << finding << "\n";
-  std::snprintf(buf, sizeof(buf), "WHERE (whole recording): gap %.3g (ensemble member vs rest: up to %.3g), %zu departures; largest:\n",
+  std::snprintf(buf, sizeof(buf),
+                "WHERE (whole recording): gap %.3g (ensemble member vs rest: up to %.3g), %zu departures; largest:\n",
                 r.gap_all, r.null_gap, r.where.size());
   o << buf;
   for (std::size_t i = 0; i < std::min<std::size_t>(8, r.where.size()); ++i)
   {
     const Departure& d = r.where[i];
-    std::snprintf(buf, sizeof(buf), "  %-10s %-13s %-20s %-8s %-11s z %+9.3g (real %.4g, sim %.4g)\n", d.where.channel.c_str(),
-                  d.where.quantity.c_str(), d.where.range.c_str(), d.where.segment.c_str(), d.where.stage.c_str(), d.z,
-                  d.real, d.sim_median);
+    std::snprintf(buf, sizeof(buf), "  %-10s %-13s %-20s %-8s %-11s z %+9.3g (real %.4g, sim %.4g)\n",
+                  d.where.channel.c_str(), d.where.quantity.c_str(), d.where.range.c_str(), d.where.segment.c_str(),
+                  d.where.stage.c_str(), d.z, d.real, d.sim_median);
     o << buf;
   }
   auto timed = [&o, &buf](const char* title, const std::vector<Departure>& list) {
@@ -900,13 +904,13 @@ std::string reportSummary(const Report& r)
   {
     o << " " << d.effect << "=" << (d.detected ? "yes" : "no");
   }
-  o << "\nWHICH (fit on first part, gap on withheld part; before " << num(r.gap_before) << ", null " << num(r.null_gap_held)
-    << "):\n";
+  o << "\nWHICH (fit on first part, gap on withheld part; before " << num(r.gap_before) << ", null "
+    << num(r.null_gap_held) << "):\n";
   for (std::size_t i = 0; i < std::min<std::size_t>(8, r.ranking.size()); ++i)
   {
     const Candidate& c = r.ranking[i];
-    std::snprintf(buf, sizeof(buf), "  %-34s gap %.3g -> %.3g  shrink %+6.1f %%  %.150s\n", c.effect.c_str(), c.gap_before,
-                  c.gap_after, 100 * c.shrink, c.params_json.c_str());
+    std::snprintf(buf, sizeof(buf), "  %-34s gap %.3g -> %.3g  shrink %+6.1f %%  %.150s\n", c.effect.c_str(),
+                  c.gap_before, c.gap_after, 100 * c.shrink, c.params_json.c_str());
     o << buf;
   }
   std::snprintf(buf, sizeof(buf), "VERDICT: %s (confidence %.2f, shrink on withheld %.0f %%)\n  params %s\n  %s\n",

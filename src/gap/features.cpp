@@ -21,7 +21,6 @@ double lg(double v)
   return std::log10(std::max(v, 1e-300));
 }
 
-
 bool isAccel(int c)
 {
   return c < 3;
@@ -59,7 +58,8 @@ FeatureLayout makeLayout(double rate, std::size_t n, bool orientation, bool temp
     }
     for (int m : L.allan_m)
     {
-      L.info.push_back({ names[c], "allan", fmt("tau %.3g s", m / rate), m / rate, m / rate, "all", "sensor", 0.012, 0.0 });
+      L.info.push_back(
+          { names[c], "allan", fmt("tau %.3g s", m / rate), m / rate, m / rate, "all", "sensor", 0.012, 0.0 });
     }
     L.info.push_back({ names[c], "mean", "", 0, 0, "all", "sensor", abs_floor, 2e-5 });
     L.info.push_back({ names[c], "log_std", "", 0, 0, "all", "sensor", 0.003, 0.0 });
@@ -81,8 +81,8 @@ FeatureLayout makeLayout(double rate, std::size_t n, bool orientation, bool temp
   {
     for (int p = 0; p < 3; ++p)
     {
-      L.info.push_back({ std::string(s == 0 ? "accel " : "gyro ") + pairs[p], "corr", "", 0, 0, "all", "sensor", 0.01,
-                         0.0 });
+      L.info.push_back(
+          { std::string(s == 0 ? "accel " : "gyro ") + pairs[p], "corr", "", 0, 0, "all", "sensor", 0.01, 0.0 });
     }
   }
   L.info.push_back({ "stamp", "log_jitter", "", 0, 0, "all", "stamps", 0.1, 0.0 });
@@ -114,7 +114,8 @@ std::vector<double> computeFeatures(const Recording& r, const FeatureLayout& L)
       for (std::size_t k = 1; k < psd.power.size(); ++k)
       {
         const double fk = k * psd.df;
-        if (fk >= L.band_edges[b] && (fk < L.band_edges[b + 1] || (b + 2 == L.band_edges.size() && fk <= L.band_edges[b + 1])))
+        if (fk >= L.band_edges[b] &&
+            (fk < L.band_edges[b + 1] || (b + 2 == L.band_edges.size() && fk <= L.band_edges[b + 1])))
         {
           sum += psd.power[k];
           ++count;
@@ -313,7 +314,8 @@ std::vector<Departure> rankDepartures(const std::vector<double>& real, const Ens
       out.push_back({ layout.info[i], real[i], stats.median[i], z[i] });
     }
   }
-  std::sort(out.begin(), out.end(), [](const Departure& a, const Departure& b) { return std::abs(a.z) > std::abs(b.z); });
+  std::sort(out.begin(), out.end(),
+            [](const Departure& a, const Departure& b) { return std::abs(a.z) > std::abs(b.z); });
   if (out.size() > max_count)
   {
     out.resize(max_count);

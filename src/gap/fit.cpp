@@ -160,9 +160,9 @@ bool anyNonZero(const Vec& v)
 struct FitStats
 {
   Vec mean = Vec(kChannels, 0.0);
-  std::vector<Psd> psd;                       ///< per channel
-  std::vector<Psd> psd_fine;                  ///< per channel, long segments (spectral lines)
-  std::vector<Vec> avar;                      ///< per channel, Allan variance at allan_m
+  std::vector<Psd> psd;                               ///< per channel
+  std::vector<Psd> psd_fine;                          ///< per channel, long segments (spectral lines)
+  std::vector<Vec> avar;                              ///< per channel, Allan variance at allan_m
   std::array<std::vector<Eigen::Matrix3d>, 2> cross;  ///< accel, gyro
   StampStats stamps;
   Vec lattice = Vec(kChannels, 0.0);
@@ -209,7 +209,8 @@ bool leverArm(const Recording& r, double rate, Eigen::Vector3d* out)
   for (std::size_t i = step; i + step < n; ++i)
   {
     const Eigen::Vector3d om = sm.row(i).tail<3>().transpose();
-    const Eigen::Vector3d al = (sm.row(i + step).tail<3>() - sm.row(i - step).tail<3>()).transpose() * rate / (2.0 * step);
+    const Eigen::Vector3d al =
+        (sm.row(i + step).tail<3>() - sm.row(i - step).tail<3>()).transpose() * rate / (2.0 * step);
     Eigen::Matrix3d Ka, Ko;
     Ka << 0, -al.z(), al.y(), al.z(), 0, -al.x(), -al.y(), al.x(), 0;
     Ko << 0, -om.z(), om.y(), om.z(), 0, -om.x(), -om.y(), om.x(), 0;

@@ -156,19 +156,21 @@ MotionFit fitMotion(const Recording& real, const sim::Scenario& scenario, const 
   // Standing tilt: a trim, a list or the mounting, not a sensor bias.
   if (beyond(fit.real.roll, roll, kAngleTolerance) || beyond(fit.real.pitch, pitch, kAngleTolerance))
   {
-    fit.findings.push_back(format("standing tilt: roll %+.4f, pitch %+.4f rad", fit.real.roll, fit.real.pitch) +
-                           format(" against %+.4f, %+.4f in the scenario (a trim, list or mounting)", roll.mean,
-                                  pitch.mean));
+    fit.findings.push_back(
+        format("standing tilt: roll %+.4f, pitch %+.4f rad", fit.real.roll, fit.real.pitch) +
+        format(" against %+.4f, %+.4f in the scenario (a trim, list or mounting)", roll.mean, pitch.mean));
     attitude.motion.roll += fit.real.roll - roll.mean;
     attitude.motion.pitch += fit.real.pitch - pitch.mean;
     attitude_differs = true;
   }
   if (std::isfinite(fit.real.heading))
   {
-    const Spread heading = spreadOf(sims, [](const MotionSummary& m) { return std::isfinite(m.heading) ? m.heading : 0.0; });
+    const Spread heading =
+        spreadOf(sims, [](const MotionSummary& m) { return std::isfinite(m.heading) ? m.heading : 0.0; });
     fit.scenario.heading = heading.mean;
     const double turn = wrap(fit.real.heading - heading.mean);
-    if (std::abs(turn) > std::max(kHeadingTolerance, 3.0 * heading.sd) && scenario.motion.type != sim::MotionType::kRoute)
+    if (std::abs(turn) > std::max(kHeadingTolerance, 3.0 * heading.sd) &&
+        scenario.motion.type != sim::MotionType::kRoute)
     {
       fit.findings.push_back(format("heading %+.3f rad against %+.3f in the scenario", fit.real.heading, heading.mean));
       attitude.motion.heading = wrap(attitude.motion.heading + turn);
@@ -190,9 +192,9 @@ MotionFit fitMotion(const Recording& real, const sim::Scenario& scenario, const 
     if (height_differs || period_differs)
     {
       fit.differs = true;
-      fit.findings.push_back(format("sea state: heave Hs %.3g m, peak period %.3g s", fit.real.wave_height,
-                                    fit.real.peak_period) +
-                             format(" against Hs %.3g m, %.3g s in the scenario", height.mean, period.mean));
+      fit.findings.push_back(
+          format("sea state: heave Hs %.3g m, peak period %.3g s", fit.real.wave_height, fit.real.peak_period) +
+          format(" against Hs %.3g m, %.3g s in the scenario", height.mean, period.mean));
       if (hasSea(scenario) && real_sea && scenario_sea)
       {
         const double period_ratio = fit.real.peak_period / std::max(period.mean, 1e-9);

@@ -43,9 +43,18 @@ public:
   }
   RealFft(const RealFft&) = delete;
   RealFft& operator=(const RealFft&) = delete;
-  double* in() { return in_; }
-  std::complex<double> out(int k) const { return { out_[k][0], out_[k][1] }; }
-  void run() { fftw_execute(plan_); }
+  double* in()
+  {
+    return in_;
+  }
+  std::complex<double> out(int k) const
+  {
+    return { out_[k][0], out_[k][1] };
+  }
+  void run()
+  {
+    fftw_execute(plan_);
+  }
 
 private:
   int n_;

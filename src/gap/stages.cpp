@@ -20,11 +20,11 @@ struct StageQuantity
   double rel_floor;
 };
 constexpr StageQuantity kStages[] = {
-  { "comp_bias", 1e-4, 0.0 },       // constant-bias estimate at the segment's end [m/s^2]
-  { "comp_frequency", 5e-3, 0.02 }, // median dominant frequency while locked [Hz] (0: never)
-  { "comp_velocity", 1e-3, 0.05 },  // rms of the filtered velocity [m/s]
-  { "comp_position", 1e-2, 0.05 },  // rms of the filtered position (error growth) [m]
-  { "comp_wave", 1e-3, 0.05 },      // rms of the wave position [m]
+  { "comp_bias", 1e-4, 0.0 },        // constant-bias estimate at the segment's end [m/s^2]
+  { "comp_frequency", 5e-3, 0.02 },  // median dominant frequency while locked [Hz] (0: never)
+  { "comp_velocity", 1e-3, 0.05 },   // rms of the filtered velocity [m/s]
+  { "comp_position", 1e-2, 0.05 },   // rms of the filtered position (error growth) [m]
+  { "comp_wave", 1e-3, 0.05 },       // rms of the wave position [m]
 };
 constexpr int kStageCount = sizeof(kStages) / sizeof(kStages[0]);
 const char* const kLevelAxes[3] = { "x", "y", "z" };
@@ -40,7 +40,8 @@ FeatureLayout stageLayout(double duration, int segments)
     {
       for (int s = 0; s < segments; ++s)
       {
-        FeatureInfo f = segmentInfo(std::string("level ") + kLevelAxes[a], q.name, "compensator", duration, s, segments);
+        FeatureInfo f =
+            segmentInfo(std::string("level ") + kLevelAxes[a], q.name, "compensator", duration, s, segments);
         f.floor = q.floor;
         f.rel_floor = q.rel_floor;
         L.info.push_back(f);
@@ -109,7 +110,9 @@ std::vector<double> stageFeatures(const Recording& r, int segments)
         double v = 0.0;
         switch (q)
         {
-          case 0: v = bias[s][a]; break;
+          case 0:
+            v = bias[s][a];
+            break;
           case 1:
             if (!fr.empty())
             {
@@ -117,9 +120,15 @@ std::vector<double> stageFeatures(const Recording& r, int segments)
               v = fr[fr.size() / 2];
             }
             break;
-          case 2: v = std::sqrt(v2[s][a] / c); break;
-          case 3: v = std::sqrt(p2[s][a] / c); break;
-          default: v = std::sqrt(w2[s][a] / c); break;
+          case 2:
+            v = std::sqrt(v2[s][a] / c);
+            break;
+          case 3:
+            v = std::sqrt(p2[s][a] / c);
+            break;
+          default:
+            v = std::sqrt(w2[s][a] / c);
+            break;
         }
         f.push_back(std::isfinite(v) ? v : 0.0);
       }

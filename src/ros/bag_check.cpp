@@ -57,8 +57,7 @@ std::string checkOffsets(const RecordFields& file_header, const std::vector<std:
   {
     return std::string();  // no index: rosbag refuses the bag itself ("unindexed")
   }
-  const auto start = std::find_if(records.begin(), records.end(),
-                                  [&](const auto& r) { return r.first == *index_pos; });
+  const auto start = std::find_if(records.begin(), records.end(), [&](const auto& r) { return r.first == *index_pos; });
   if (start == records.end())
   {
     return "the file header's index position " + std::to_string(*index_pos) + " is not the start of a record";
@@ -71,9 +70,8 @@ std::string checkOffsets(const RecordFields& file_header, const std::vector<std:
     const char expected = k < connections ? kOpConnection : kOpChunkInfo;
     if (next == records.end() || next->second != expected)
     {
-      return "the file header announces " + std::to_string(connections) + " connection and " +
-             std::to_string(chunks) + " chunk info records at byte " + std::to_string(*index_pos) +
-             ", which the file does not hold";
+      return "the file header announces " + std::to_string(connections) + " connection and " + std::to_string(chunks) +
+             " chunk info records at byte " + std::to_string(*index_pos) + ", which the file does not hold";
     }
   }
   for (const auto& chunk_info : chunk_positions)
@@ -113,10 +111,15 @@ std::string checkHeader(std::string_view header, std::uint64_t where, RecordFiel
     const std::string_view name = field.substr(0, equals),
                            value = equals == std::string_view::npos ? std::string_view() : field.substr(equals + 1);
     for (auto [key, target] : { std::pair{ std::string_view("op"), &fields->op },
-                                { "compression", &fields->compression }, { "conn", &fields->conn },
-                                { "count", &fields->count }, { "ver", &fields->ver }, { "size", &fields->size },
-                                { "index_pos", &fields->index_pos }, { "conn_count", &fields->conn_count },
-                                { "chunk_count", &fields->chunk_count }, { "chunk_pos", &fields->chunk_pos } })
+                                { "compression", &fields->compression },
+                                { "conn", &fields->conn },
+                                { "count", &fields->count },
+                                { "ver", &fields->ver },
+                                { "size", &fields->size },
+                                { "index_pos", &fields->index_pos },
+                                { "conn_count", &fields->conn_count },
+                                { "chunk_count", &fields->chunk_count },
+                                { "chunk_pos", &fields->chunk_pos } })
     {
       if (name == key)
       {
@@ -162,7 +165,7 @@ std::string checkRecord(const std::string& data, std::size_t offset, std::uint64
 struct ChunkLayout
 {
   bool present = false;
-  bool walked = false;               ///< records walked (decompressed first if need be): every record start is known
+  bool walked = false;  ///< records walked (decompressed first if need be): every record start is known
   std::uint64_t uncompressed_size = 0;
   std::vector<std::pair<std::uint32_t, std::string>> messages;  ///< offset of each message record (rising), its conn
 };
@@ -176,16 +179,16 @@ std::string decompressChunk(const std::string& compression, std::string& data, s
   const std::string what = "chunk at byte " + std::to_string(where) + " (" + compression + ")";
   if (declared > 1000 * std::uint64_t{ data.size() } + (1u << 20))
   {
-    return what + " declares " + std::to_string(declared) + " uncompressed bytes for " +
-           std::to_string(data.size()) + " compressed ones";
+    return what + " declares " + std::to_string(declared) + " uncompressed bytes for " + std::to_string(data.size()) +
+           " compressed ones";
   }
   plain->assign(declared, '\0');
   unsigned int produced = static_cast<unsigned int>(declared);
-  const bool ok = compression == "lz4" ?
-                      roslz4_buffToBuffDecompress(&data[0], static_cast<unsigned int>(data.size()), &(*plain)[0],
-                                                  &produced) == ROSLZ4_OK :
-                      BZ2_bzBuffToBuffDecompress(&(*plain)[0], &produced, &data[0],
-                                                 static_cast<unsigned int>(data.size()), 0, 0) == BZ_OK;
+  const bool ok = compression == "lz4"
+                      ? roslz4_buffToBuffDecompress(&data[0], static_cast<unsigned int>(data.size()), &(*plain)[0],
+                                                    &produced) == ROSLZ4_OK
+                      : BZ2_bzBuffToBuffDecompress(&(*plain)[0], &produced, &data[0],
+                                                   static_cast<unsigned int>(data.size()), 0, 0) == BZ_OK;
   if (!ok || produced != declared)
   {
     return what + " does not decompress to the " + std::to_string(declared) + " bytes it declares";
@@ -244,14 +247,14 @@ std::string checkIndex(const RecordFields& fields, const std::string& data, std:
     const std::uint32_t offset = u32(data.data() + 12 * i + 8);
     const auto message = std::lower_bound(chunk.messages.begin(), chunk.messages.end(), offset,
                                           [](const auto& m, std::uint32_t o) { return m.first < o; });
-    const bool points_at_message = chunk.walked ? message != chunk.messages.end() && message->first == offset &&
-                                                      message->second == fields.conn :
-                                                  offset + 8ULL <= chunk.uncompressed_size;
+    const bool points_at_message =
+        chunk.walked ? message != chunk.messages.end() && message->first == offset && message->second == fields.conn
+                     : offset + 8ULL <= chunk.uncompressed_size;
     if (!points_at_message)
     {
       return at + ": entry " + std::to_string(i) + " points at offset " + std::to_string(offset) +
-             (chunk.walked ? ", where the chunk has no message of that connection" :
-                             ", beyond the chunk's " + std::to_string(chunk.uncompressed_size) + " bytes");
+             (chunk.walked ? ", where the chunk has no message of that connection"
+                           : ", beyond the chunk's " + std::to_string(chunk.uncompressed_size) + " bytes");
     }
   }
   return std::string();
@@ -280,7 +283,7 @@ std::string checkBagStructure(const std::string& path)
   std::uint64_t position = kMagic.size();
   ChunkLayout chunk;
   RecordFields file_header;
-  std::vector<std::pair<std::uint64_t, char>> records;                  // offset, op
+  std::vector<std::pair<std::uint64_t, char>> records;                   // offset, op
   std::vector<std::pair<std::uint64_t, std::uint64_t>> chunk_positions;  // chunk info offset, chunk_pos
   char length[4];
   while (position + 4 <= size)
@@ -375,7 +378,6 @@ std::string checkBagStructure(const std::string& path)
   }
   return checkOffsets(file_header, records, chunk_positions);
 }
-
 
 std::string corruptBagMessage(const std::string& path, const std::string& what)
 {

@@ -109,8 +109,7 @@ void appendConnectionRecord(std::vector<std::uint8_t>* out, std::uint32_t id, co
 constexpr std::uint32_t kMessageHeaderLength = (4 + 5 + 4) + (4 + 3 + 1) + (4 + 5 + 8);
 }  // namespace
 
-BagWriter::BagWriter(const std::string& path, Compression compression, bool background,
-                     std::uint32_t chunk_threshold)
+BagWriter::BagWriter(const std::string& path, Compression compression, bool background, std::uint32_t chunk_threshold)
   : path_(path), compression_(compression), chunk_threshold_(std::max<std::uint32_t>(chunk_threshold, 1))
 {
   file_ = std::fopen(path.c_str(), "wb");

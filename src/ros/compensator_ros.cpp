@@ -96,9 +96,10 @@ CompensatorRos::CompensatorRos(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh
     }
     else
     {
-      ROS_WARN("calibration file %s does not exist: calibrating from the first %.1f s of data "
-               "(call ~save_calibration to write it)",
-               calibration_file.c_str(), params_.core.calibration_duration);
+      ROS_WARN(
+          "calibration file %s does not exist: calibrating from the first %.1f s of data "
+          "(call ~save_calibration to write it)",
+          calibration_file.c_str(), params_.core.calibration_duration);
     }
   }
   frame_filter_ = FrameFilter(params_.ros.imu_frame);
@@ -126,15 +127,13 @@ CompensatorRos::CompensatorRos(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh
   save_srv_ = pnh_.advertiseService("save_calibration", &CompensatorRos::saveCalibration, this);
 
   reconfigure_server_ = std::make_unique<dynamic_reconfigure::Server<TuningConfig>>(mutex_, pnh_);
-  reconfigure_server_->setCallback(
-      [this](TuningConfig& config, uint32_t level) { reconfigure(config, level); });
+  reconfigure_server_->setCallback([this](TuningConfig& config, uint32_t level) { reconfigure(config, level); });
 
   // A deep queue: every dropped sample is a gap for the integration (1000 samples are 10 s at
   // 100 Hz, enough to ride out a stall or a bag replayed faster than real time).
   imu_sub_ = nh_.subscribe("imu/data", 1000, &CompensatorRos::imuCallback, this, ros::TransportHints().tcpNoDelay());
-  ROS_INFO("bias compensation (%s mode) listening on %s, publishing %s and %s",
-           toString(params_.core.mode).c_str(), imu_sub_.getTopic().c_str(), filtered_pub_.getTopic().c_str(),
-           wave_pub_.getTopic().c_str());
+  ROS_INFO("bias compensation (%s mode) listening on %s, publishing %s and %s", toString(params_.core.mode).c_str(),
+           imu_sub_.getTopic().c_str(), filtered_pub_.getTopic().c_str(), wave_pub_.getTopic().c_str());
 }
 
 CompensatorRos::~CompensatorRos() = default;
@@ -152,8 +151,8 @@ void CompensatorRos::imuCallback(const sensor_msgs::Imu::ConstPtr& msg)
   if (!frame_filter_.accept(msg->header.frame_id))
   {
     ++counters_.rejected_wrong_frame;
-    ROS_WARN_THROTTLE(kWarnPeriod, "imu/data: frame_id '%s' is not the expected '%s': message dropped (%" PRIu64
-                                   " so far)",
+    ROS_WARN_THROTTLE(kWarnPeriod,
+                      "imu/data: frame_id '%s' is not the expected '%s': message dropped (%" PRIu64 " so far)",
                       msg->header.frame_id.c_str(), frame_filter_.expected().c_str(), counters_.rejected_wrong_frame);
     return;
   }
@@ -167,8 +166,9 @@ void CompensatorRos::imuCallback(const sensor_msgs::Imu::ConstPtr& msg)
   if (!plausible(sample))
   {
     ++counters_.rejected_out_of_range;
-    ROS_WARN_THROTTLE(kWarnPeriod, "imu/data: sample at t = %.3f s dropped: acceleration or angular rate out of range "
-                                   "(|a| > %.0f m/s^2 or |w| > %.0f rad/s)",
+    ROS_WARN_THROTTLE(kWarnPeriod,
+                      "imu/data: sample at t = %.3f s dropped: acceleration or angular rate out of range "
+                      "(|a| > %.0f m/s^2 or |w| > %.0f rad/s)",
                       sample.t, kMaxSpecificForce, kMaxAngularRate);
     return;
   }
@@ -211,8 +211,10 @@ void CompensatorRos::imuCallback(const sensor_msgs::Imu::ConstPtr& msg)
       ROS_WARN_THROTTLE(kWarnPeriod, "imu/data: sample at t = %.3f s dropped: %s", sample.t, toString(status).c_str());
       return;
     case SampleStatus::kHeld:
-      ROS_WARN_THROTTLE(kWarnPeriod, "imu/data: stamp t = %.3f s does not continue the stream: held until %d samples "
-                        "confirm the jump, dropped if the stream goes on", sample.t, kConfirmSamples);
+      ROS_WARN_THROTTLE(kWarnPeriod,
+                        "imu/data: stamp t = %.3f s does not continue the stream: held until %d samples "
+                        "confirm the jump, dropped if the stream goes on",
+                        sample.t, kConfirmSamples);
       return;
     case SampleStatus::kResetBackwards:
       ROS_WARN_THROTTLE(kWarnPeriod, "imu/data: stamp went backwards (t = %.3f s): estimator and paths reset",
@@ -234,7 +236,8 @@ bool CompensatorRos::updateMounting(const sensor_msgs::Imu& msg)
   {
     // Repeated once a minute of wall time after the first WARN (rosconsole's delayed throttle
     // starts from ros::Time, which jumps when a bag's clock starts: a second WARN at once).
-    if (mounting_state_ == MountingState::kFallback && ros::WallTime::now() - mounting_warned_ > ros::WallDuration(60.0))
+    if (mounting_state_ == MountingState::kFallback &&
+        ros::WallTime::now() - mounting_warned_ > ros::WallDuration(60.0))
     {
       mounting_warned_ = ros::WallTime::now();
       ROS_WARN("no transform %s -> %s: using the identity as IMU mounting", msg.header.frame_id.c_str(),
@@ -405,8 +408,7 @@ bool CompensatorRos::calibrate(std_srvs::Trigger::Request& /*req*/, std_srvs::Tr
   calibration_source_ = "calibration window";
   std::ostringstream message;
   message << "constant-bias calibration restarts at the next sample and uses " << params_.core.calibration_duration
-          << " s of data"
-          << (params_.core.assume_static_calibration ? "; keep the sensor still until then" : "")
+          << " s of data" << (params_.core.assume_static_calibration ? "; keep the sensor still until then" : "")
           << "; call ~save_calibration afterwards to store it";
   res.success = true;
   res.message = message.str();
@@ -435,8 +437,7 @@ bool CompensatorRos::saveCalibration(std_srvs::Trigger::Request& /*req*/, std_sr
     {
       res.success = true;
       std::ostringstream message;
-      message << "constant bias [" << bias.x() << ", " << bias.y() << ", " << bias.z() << "] m/s^2 written to "
-              << path;
+      message << "constant bias [" << bias.x() << ", " << bias.y() << ", " << bias.z() << "] m/s^2 written to " << path;
       res.message = message.str();
     }
     else
@@ -463,8 +464,8 @@ void CompensatorRos::diagnoseInput(const ros::Time& now,
   if (units == ForceUnits::kLooksLikeG || units == ForceUnits::kImplausible)
   {
     char text[200];
-    std::snprintf(text, sizeof text, "mean specific force %.3f against gravity %.3f m/s^2: %s", compensator_->meanSpecificForce(),
-                  compensator_->config().gravity, toString(units).c_str());
+    std::snprintf(text, sizeof text, "mean specific force %.3f against gravity %.3f m/s^2: %s",
+                  compensator_->meanSpecificForce(), compensator_->config().gravity, toString(units).c_str());
     raise(DiagnosticStatus::ERROR, text);
   }
   // Input arriving while nothing is published: every sample refused, or held for a jump.
@@ -566,8 +567,8 @@ void CompensatorRos::diagnoseSetup(const std::function<void(std::uint8_t, const 
   }
   if (mounting_state_ == MountingState::kFallback)
   {
-    raise(DiagnosticStatus::WARN, "no transform " + frame_filter_.expected() + " -> " + params_.ros.base_frame +
-                                      ": identity mounting assumed");
+    raise(DiagnosticStatus::WARN,
+          "no transform " + frame_filter_.expected() + " -> " + params_.ros.base_frame + ": identity mounting assumed");
   }
 }
 
@@ -640,7 +641,8 @@ void CompensatorRos::addDiagnosticValues(diagnostic_updater::DiagnosticStatusWra
   stat.add("input topic", imu_sub_.getTopic());
   stat.add("input frame", frame_filter_.known() ? frame_filter_.expected() : std::string("(not seen yet)"));
   stat.addf("input rate [Hz]", "%.2f",
-            interval > 0.0 ? static_cast<double>(countSince(counters_.received, diag_wrapper_prev_.received)) / interval : 0.0);
+            interval > 0.0 ? static_cast<double>(countSince(counters_.received, diag_wrapper_prev_.received)) / interval
+                           : 0.0);
   stat.addf("estimated sample rate [Hz]", "%.2f", core.sample_rate);
   stat.add("received", counters_.received);
   stat.add("accepted", core.accepted);
@@ -677,7 +679,8 @@ void CompensatorRos::addDiagnosticValues(diagnostic_updater::DiagnosticStatusWra
   {
     stat.add("last refused reconfigure", last_refusal_);
   }
-  const char* mounting_names[] = { "waiting for tf", "from tf", "identity (imu frame is base frame, or identity_mounting)",
+  const char* mounting_names[] = { "waiting for tf", "from tf",
+                                   "identity (imu frame is base frame, or identity_mounting)",
                                    "identity (tf lookup failed)" };
   stat.add("mounting", mounting_names[static_cast<int>(mounting_state_)]);
   stat.add("calibration", compensator_->calibrated() ? "done (" + calibration_source_ + ")" : std::string("running"));

@@ -89,8 +89,8 @@ std::string declaration(const Parameter<CompensatorConfig>& parameter)
   if (number &&
       ((!range.min_inclusive && std::isfinite(range.min)) || (!range.max_inclusive && std::isfinite(range.max))))
     line << "# accepted " << toString(range) << ": an open bound is given as the nearest double inside it\n";
-  line << "gen.add(" << python(parameter.key) << ", " << reconfigureType(parameter.type) << "_t" << ", 0, "
-       << python(reconfigureDescription(parameter)) << ", " << python(parameter.defaultValue());
+  line << "gen.add(" << python(parameter.key) << ", " << reconfigureType(parameter.type) << "_t"
+       << ", 0, " << python(reconfigureDescription(parameter)) << ", " << python(parameter.defaultValue());
   // An infinite bound is dynamic_reconfigure's default (no bound): left out.
   if (number && std::isfinite(range.lowest()))
     line << ", min=" << formatNumber(range.lowest());

@@ -33,8 +33,8 @@ bool readValue(const ParameterSource& source, const std::string& key, ParameterT
 
 /// Reads `key` into *config when it is one of `table`'s keys; *found tells whether it is.
 template <class Config>
-bool readKey(const ParameterSource& source, const std::string& key, const ParameterTable<Config>& table,
-             Config* config, bool* found, std::string* why)
+bool readKey(const ParameterSource& source, const std::string& key, const ParameterTable<Config>& table, Config* config,
+             bool* found, std::string* why)
 {
   const Parameter<Config>* parameter = findParameter(table, key);
   *found = parameter != nullptr;

@@ -32,14 +32,12 @@ ParamInfo scalar(const std::string& name, const std::string& unit, double def, d
   return { name, unit, 1, { def }, lo, hi, description };
 }
 
-ParamInfo matrix(const std::string& name, const std::string& unit, double lo, double hi,
-                 const std::string& description)
+ParamInfo matrix(const std::string& name, const std::string& unit, double lo, double hi, const std::string& description)
 {
   return { name, unit, 9, rep(0.0, 9), lo, hi, description };
 }
 
-ParamInfo list(const std::string& name, const std::string& unit, double lo, double hi,
-               const std::string& description)
+ParamInfo list(const std::string& name, const std::string& unit, double lo, double hi, const std::string& description)
 {
   return { name, unit, 0, {}, lo, hi, description };
 }
@@ -51,19 +49,23 @@ std::vector<EffectInfo> buildVocabulary()
                 "sensor mounted at an offset from base_link: adds alpha x r + omega x (omega x r)",
                 { axes("offset", "m", 0.0, -100.0, 100.0, "sensor position in base_link") },
                 0 });
-  v.push_back({ "misalignment", "cross-axis coupling: out = (I + M) in",
+  v.push_back({ "misalignment",
+                "cross-axis coupling: out = (I + M) in",
                 { matrix("accel", "rad", -0.5, 0.5, "accelerometer coupling matrix M, row-major"),
                   matrix("gyro", "rad", -0.5, 0.5, "gyro coupling matrix M, row-major") },
                 1 });
-  v.push_back({ "scale_factor", "out = (1 + s) in per axis",
+  v.push_back({ "scale_factor",
+                "out = (1 + s) in per axis",
                 { axes("accel", "-", 0.0, -0.5, 0.5, "accelerometer scale factor error"),
                   axes("gyro", "-", 0.0, -0.5, 0.5, "gyro scale factor error") },
                 2 });
-  v.push_back({ "constant_bias", "constant offset",
+  v.push_back({ "constant_bias",
+                "constant offset",
                 { axes("accel", "m/s^2", 0.0, -100.0, 100.0, "accelerometer bias"),
                   axes("gyro", "rad/s", 0.0, -10.0, 10.0, "gyro bias") },
                 3 });
-  v.push_back({ "periodic_bias", "b = amplitude * sin(2 pi elapsed / period + phase) per axis",
+  v.push_back({ "periodic_bias",
+                "b = amplitude * sin(2 pi elapsed / period + phase) per axis",
                 { axes("accel_amplitude", "m/s^2", 0.0, 0.0, 100.0, "accelerometer amplitude"),
                   axes("accel_period", "s", 10.0, 1e-3, 1e7, "accelerometer period"),
                   axes("accel_phase", "rad", 0.0, -100.0, 100.0, "accelerometer phase"),
@@ -75,14 +77,15 @@ std::vector<EffectInfo> buildVocabulary()
                 "b = coefficient * (T - reference_temperature); needs the scenario's temperature",
                 { axes("accel_coefficient", "m/s^2/K", 0.0, -1.0, 1.0, "accelerometer coefficient"),
                   axes("gyro_coefficient", "rad/s/K", 0.0, -1.0, 1.0, "gyro coefficient"),
-                  scalar("reference_temperature", "degC", 20.0, -100.0, 200.0,
-                         "temperature of zero thermal bias") },
+                  scalar("reference_temperature", "degC", 20.0, -100.0, 200.0, "temperature of zero thermal bias") },
                 3 });
-  v.push_back({ "bias_random_walk", "b += density * sqrt(dt) * N(0,1) each sample (Allan slope +1/2)",
+  v.push_back({ "bias_random_walk",
+                "b += density * sqrt(dt) * N(0,1) each sample (Allan slope +1/2)",
                 { axes("accel_density", "m/s^3/sqrt(Hz)", 0.0, 0.0, 10.0, "accelerometer rate random walk"),
                   axes("gyro_density", "rad/s^2/sqrt(Hz)", 0.0, 0.0, 10.0, "gyro rate random walk") },
                 3 });
-  v.push_back({ "bias_instability", "first-order Gauss-Markov bias, stationary from the start",
+  v.push_back({ "bias_instability",
+                "first-order Gauss-Markov bias, stationary from the start",
                 { axes("accel_sigma", "m/s^2", 0.0, 0.0, 100.0, "accelerometer standard deviation"),
                   axes("gyro_sigma", "rad/s", 0.0, 0.0, 10.0, "gyro standard deviation"),
                   scalar("correlation_time", "s", 100.0, 1e-3, 1e9, "correlation time") },
@@ -101,26 +104,29 @@ std::vector<EffectInfo> buildVocabulary()
                 { axes("accel_density", "m/s^2/sqrt(Hz)", 0.0, 0.0, 10.0, "accelerometer noise density"),
                   axes("gyro_density", "rad/s/sqrt(Hz)", 0.0, 0.0, 10.0, "gyro noise density") },
                 5 });
-  v.push_back({ "saturation", "clips each axis to +-limit",
+  v.push_back({ "saturation",
+                "clips each axis to +-limit",
                 { axes("accel_limit", "m/s^2", 160.0, 1e-6, 1e6, "accelerometer full scale"),
                   axes("gyro_limit", "rad/s", 35.0, 1e-6, 1e6, "gyro full scale") },
                 6 });
-  v.push_back({ "quantization", "rounds each axis to a multiple of step (0 = off)",
+  v.push_back({ "quantization",
+                "rounds each axis to a multiple of step (0 = off)",
                 { axes("accel_step", "m/s^2", 0.0, 0.0, 100.0, "accelerometer LSB"),
                   axes("gyro_step", "rad/s", 0.0, 0.0, 10.0, "gyro LSB") },
                 7 });
-  v.push_back({ "gravity_leakage",
-                "tilt error of the REPORTED orientation: reported = attitude * R(yaw) R(pitch) R(roll)",
-                { scalar("roll", "rad", 0.0, -1.5, 1.5, "roll error"),
-                  scalar("pitch", "rad", 0.0, -1.5, 1.5, "pitch error"),
-                  scalar("yaw", "rad", 0.0, -3.2, 3.2, "yaw error") },
-                8 });
+  v.push_back(
+      { "gravity_leakage",
+        "tilt error of the REPORTED orientation: reported = attitude * R(yaw) R(pitch) R(roll)",
+        { scalar("roll", "rad", 0.0, -1.5, 1.5, "roll error"), scalar("pitch", "rad", 0.0, -1.5, 1.5, "pitch error"),
+          scalar("yaw", "rad", 0.0, -3.2, 3.2, "yaw error") },
+        8 });
   v.push_back({ "sample_hold",
                 "the driver polls faster than the sensor updates: a new reading every 1 / sensor_rate s, "
                 "repeated in between",
                 { scalar("sensor_rate", "Hz", 0.0, 0.0, 1e5, "the sensor's own update rate (0 = off)") },
                 8 });
-  v.push_back({ "timestamp_jitter", "stamp = t + offset + N(0, sigma^2)",
+  v.push_back({ "timestamp_jitter",
+                "stamp = t + offset + N(0, sigma^2)",
                 { scalar("sigma", "s", 0.0, 0.0, 1.0, "standard deviation of the stamp error"),
                   scalar("offset", "s", 0.0, -10.0, 10.0, "constant stamp delay") },
                 9 });
@@ -164,7 +170,9 @@ double num(const EffectSpec& spec, const std::string& key)
 class LeverArm : public Effect
 {
 public:
-  explicit LeverArm(const EffectSpec& spec) : offset_(vec3(spec, "offset")) {}
+  explicit LeverArm(const EffectSpec& spec) : offset_(vec3(spec, "offset"))
+  {
+  }
   void apply(const EffectInput& in, ImuOutput& out) override
   {
     const Vector3& w = in.truth->angular_rate;
@@ -215,7 +223,9 @@ private:
 class ConstantBias : public Effect
 {
 public:
-  explicit ConstantBias(const EffectSpec& spec) : accel_(vec3(spec, "accel")), gyro_(vec3(spec, "gyro")) {}
+  explicit ConstantBias(const EffectSpec& spec) : accel_(vec3(spec, "accel")), gyro_(vec3(spec, "gyro"))
+  {
+  }
   void apply(const EffectInput&, ImuOutput& out) override
   {
     out.accel += accel_;
@@ -231,12 +241,12 @@ class PeriodicBias : public Effect
 {
 public:
   explicit PeriodicBias(const EffectSpec& spec)
-    : accel_amplitude_(vec3(spec, "accel_amplitude"))
-    , accel_omega_(kTwoPi * vec3(spec, "accel_period").cwiseInverse())
-    , accel_phase_(vec3(spec, "accel_phase"))
-    , gyro_amplitude_(vec3(spec, "gyro_amplitude"))
-    , gyro_omega_(kTwoPi * vec3(spec, "gyro_period").cwiseInverse())
-    , gyro_phase_(vec3(spec, "gyro_phase"))
+    : accel_amplitude_(vec3(spec, "accel_amplitude")),
+      accel_omega_(kTwoPi * vec3(spec, "accel_period").cwiseInverse()),
+      accel_phase_(vec3(spec, "accel_phase")),
+      gyro_amplitude_(vec3(spec, "gyro_amplitude")),
+      gyro_omega_(kTwoPi * vec3(spec, "gyro_period").cwiseInverse()),
+      gyro_phase_(vec3(spec, "gyro_phase"))
   {
   }
   void apply(const EffectInput& in, ImuOutput& out) override
@@ -261,9 +271,9 @@ class ThermalDrift : public Effect
 {
 public:
   explicit ThermalDrift(const EffectSpec& spec)
-    : accel_(vec3(spec, "accel_coefficient"))
-    , gyro_(vec3(spec, "gyro_coefficient"))
-    , reference_(num(spec, "reference_temperature"))
+    : accel_(vec3(spec, "accel_coefficient")),
+      gyro_(vec3(spec, "gyro_coefficient")),
+      reference_(num(spec, "reference_temperature"))
   {
   }
   void apply(const EffectInput& in, ImuOutput& out) override
@@ -287,9 +297,9 @@ class BiasRandomWalk : public Effect
 {
 public:
   BiasRandomWalk(const EffectSpec& spec, std::uint64_t seed, double rate)
-    : accel_step_(vec3(spec, "accel_density") / std::sqrt(rate))
-    , gyro_step_(vec3(spec, "gyro_density") / std::sqrt(rate))
-    , rng_(seed)
+    : accel_step_(vec3(spec, "accel_density") / std::sqrt(rate)),
+      gyro_step_(vec3(spec, "gyro_density") / std::sqrt(rate)),
+      rng_(seed)
   {
   }
   void apply(const EffectInput&, ImuOutput& out) override
@@ -315,11 +325,11 @@ class BiasInstability : public Effect
 {
 public:
   BiasInstability(const EffectSpec& spec, std::uint64_t seed, double rate)
-    : accel_sigma_(vec3(spec, "accel_sigma"))
-    , gyro_sigma_(vec3(spec, "gyro_sigma"))
-    , phi_(std::exp(-1.0 / (rate * num(spec, "correlation_time"))))
-    , drive_(std::sqrt(1.0 - phi_ * phi_))
-    , rng_(seed)
+    : accel_sigma_(vec3(spec, "accel_sigma")),
+      gyro_sigma_(vec3(spec, "gyro_sigma")),
+      phi_(std::exp(-1.0 / (rate * num(spec, "correlation_time")))),
+      drive_(std::sqrt(1.0 - phi_ * phi_)),
+      rng_(seed)
   {
     for (int i = 0; i < 3; ++i)
     {
@@ -415,9 +425,9 @@ class WhiteNoise : public Effect
 {
 public:
   WhiteNoise(const EffectSpec& spec, std::uint64_t seed, double rate)
-    : accel_sigma_(vec3(spec, "accel_density") * std::sqrt(rate))
-    , gyro_sigma_(vec3(spec, "gyro_density") * std::sqrt(rate))
-    , rng_(seed)
+    : accel_sigma_(vec3(spec, "accel_density") * std::sqrt(rate)),
+      gyro_sigma_(vec3(spec, "gyro_density") * std::sqrt(rate)),
+      rng_(seed)
   {
   }
   void apply(const EffectInput&, ImuOutput& out) override
@@ -438,7 +448,9 @@ private:
 class Saturation : public Effect
 {
 public:
-  explicit Saturation(const EffectSpec& spec) : accel_(vec3(spec, "accel_limit")), gyro_(vec3(spec, "gyro_limit")) {}
+  explicit Saturation(const EffectSpec& spec) : accel_(vec3(spec, "accel_limit")), gyro_(vec3(spec, "gyro_limit"))
+  {
+  }
   void apply(const EffectInput&, ImuOutput& out) override
   {
     out.accel = out.accel.cwiseMax(-accel_).cwiseMin(accel_);
@@ -453,7 +465,9 @@ private:
 class Quantization : public Effect
 {
 public:
-  explicit Quantization(const EffectSpec& spec) : accel_(vec3(spec, "accel_step")), gyro_(vec3(spec, "gyro_step")) {}
+  explicit Quantization(const EffectSpec& spec) : accel_(vec3(spec, "accel_step")), gyro_(vec3(spec, "gyro_step"))
+  {
+  }
   void apply(const EffectInput&, ImuOutput& out) override
   {
     for (int i = 0; i < 3; ++i)
@@ -513,7 +527,8 @@ private:
 class SampleHold : public Effect
 {
 public:
-  explicit SampleHold(const EffectSpec& spec) : interval_(num(spec, "sensor_rate") > 0.0 ? 1.0 / num(spec, "sensor_rate") : 0.0)
+  explicit SampleHold(const EffectSpec& spec)
+    : interval_(num(spec, "sensor_rate") > 0.0 ? 1.0 / num(spec, "sensor_rate") : 0.0)
   {
   }
   void apply(const EffectInput& in, ImuOutput& out) override
@@ -650,11 +665,14 @@ std::unique_ptr<Effect> makeEffect(const EffectSpec& spec, std::uint64_t seed, d
       [](const EffectSpec& e, std::uint64_t s, double r) { return std::make_unique<BiasRandomWalk>(e, s, r); } },
     { "bias_instability",
       [](const EffectSpec& e, std::uint64_t s, double r) { return std::make_unique<BiasInstability>(e, s, r); } },
-    { "vibration", [](const EffectSpec& e, std::uint64_t s, double r) { return std::make_unique<Vibration>(e, s, r); } },
-    { "white_noise", [](const EffectSpec& e, std::uint64_t s, double r) { return std::make_unique<WhiteNoise>(e, s, r); } },
+    { "vibration",
+      [](const EffectSpec& e, std::uint64_t s, double r) { return std::make_unique<Vibration>(e, s, r); } },
+    { "white_noise",
+      [](const EffectSpec& e, std::uint64_t s, double r) { return std::make_unique<WhiteNoise>(e, s, r); } },
     { "saturation", [](const EffectSpec& e, std::uint64_t, double) { return std::make_unique<Saturation>(e); } },
     { "quantization", [](const EffectSpec& e, std::uint64_t, double) { return std::make_unique<Quantization>(e); } },
-    { "gravity_leakage", [](const EffectSpec& e, std::uint64_t, double) { return std::make_unique<GravityLeakage>(e); } },
+    { "gravity_leakage",
+      [](const EffectSpec& e, std::uint64_t, double) { return std::make_unique<GravityLeakage>(e); } },
     { "sample_hold", [](const EffectSpec& e, std::uint64_t, double) { return std::make_unique<SampleHold>(e); } },
     { "timestamp_jitter",
       [](const EffectSpec& e, std::uint64_t s, double) { return std::make_unique<TimestampJitter>(e, s); } },

@@ -116,8 +116,8 @@ SlowState SlowMotion::at(double elapsed) const
     const double r = s.turn_rate;
     out.heading = wrapAngle(psi);
     out.yaw_rate = r;
-    out.position = s.position + (v / r) * Vector3(std::sin(psi) - std::sin(s.heading),
-                                                   std::cos(s.heading) - std::cos(psi), 0.0);
+    out.position =
+        s.position + (v / r) * Vector3(std::sin(psi) - std::sin(s.heading), std::cos(s.heading) - std::cos(psi), 0.0);
     out.velocity = v * Vector3(std::cos(psi), std::sin(psi), 0.0);
     out.acceleration = v * r * Vector3(-std::sin(psi), std::cos(psi), 0.0);
     return out;

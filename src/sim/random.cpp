@@ -4,7 +4,9 @@
 
 namespace periodic_bias_compensation::sim
 {
-Rng::Rng(std::uint64_t seed) : engine_(seed) {}
+Rng::Rng(std::uint64_t seed) : engine_(seed)
+{
+}
 
 double Rng::uniform()
 {

@@ -158,14 +158,13 @@ YAML::Node sequence(Mapping& m, const std::string& key)
   return node;
 }
 
-void check(const std::string& key, double value, double lo, double hi, const std::string& unit,
-           bool open_low = false)
+void check(const std::string& key, double value, double lo, double hi, const std::string& unit, bool open_low = false)
 {
   if (!std::isfinite(value) || value < lo || value > hi || (open_low && value == lo))
   {
     std::ostringstream os;
-    os << "key '" << key << "': value " << value << " outside " << (open_low ? "(" : "[") << lo << ", " << hi
-       << "] " << unit;
+    os << "key '" << key << "': value " << value << " outside " << (open_low ? "(" : "[") << lo << ", " << hi << "] "
+       << unit;
     throw std::runtime_error(os.str());
   }
 }
@@ -187,8 +186,7 @@ MotionType motionType(const std::string& name, const std::string& key)
       return t;
     }
   }
-  throw std::runtime_error("key '" + key + "': unknown motion type '" + name +
-                           "' (static, sinusoids, sea, route)");
+  throw std::runtime_error("key '" + key + "': unknown motion type '" + name + "' (static, sinusoids, sea, route)");
 }
 
 void parseSinusoids(Mapping& motion, Motion* out)

@@ -280,9 +280,9 @@ public:
     for (const rosbag::ConnectionInfo* c : all.getConnections())
     {
       const std::string topic = absoluteTopic(c->topic);
-      const Role role = topic == imu_topic                                    ? Role::kImu :
-                        options_.outputs.ground_truth && isGroundTruth(topic) ? Role::kCopy :
-                                                                                Role::kSkip;
+      const Role role = topic == imu_topic                                      ? Role::kImu
+                        : options_.outputs.ground_truth && isGroundTruth(topic) ? Role::kCopy
+                                                                                : Role::kSkip;
       connections.push_back(InputConnection{ c->header.get(), c->id, role, std::nullopt });
     }
     rosbag::View view(in, [&connections](const rosbag::ConnectionInfo* c) {
@@ -403,10 +403,10 @@ private:
   };
   struct InputConnection
   {
-    const ros::M_string* header;       ///< rosbag::ConnectionInfo::header
+    const ros::M_string* header;  ///< rosbag::ConnectionInfo::header
     std::uint32_t id;
     Role role;
-    std::optional<std::uint32_t> copy;    ///< OUT's connection, for kCopy
+    std::optional<std::uint32_t> copy;  ///< OUT's connection, for kCopy
   };
 
   /// The messages of `topic` in IN (with or without its leading '/') up to bag time `until`.
@@ -474,8 +474,8 @@ private:
     {
       case MountingSource::kNotNeeded:
         std::fprintf(stderr, "compensate_bag: mounting: %s\n",
-                     frame == base ? ("the IMU's frame is " + base + ": none needed").c_str() :
-                                     ("identity_mounting: " + frame + " taken as aligned with " + base).c_str());
+                     frame == base ? ("the IMU's frame is " + base + ": none needed").c_str()
+                                   : ("identity_mounting: " + frame + " taken as aligned with " + base).c_str());
         break;
       case MountingSource::kTransform:
         std::fprintf(stderr, "compensate_bag: mounting: %s -> %s from %s, %s\n", frame.c_str(), base.c_str(),
@@ -571,15 +571,15 @@ private:
   const Options& options_;
   const Parameters& params_;
   Compensator compensator_;
-  std::optional<Vector3> loaded_bias_;       ///< from calibration_file, if one was loaded
-  std::vector<ImuSample> tuning_samples_;    ///< the samples given to the core, kept for --tune-gains
+  std::optional<Vector3> loaded_bias_;     ///< from calibration_file, if one was loaded
+  std::vector<ImuSample> tuning_samples_;  ///< the samples given to the core, kept for --tune-gains
   FrameFilter frame_filter_;
   Mounting mounting_;
   std::uint64_t received_ = 0;
   std::uint64_t wrong_frame_ = 0;
   std::uint64_t out_of_range_ = 0;
   std::uint64_t nonfinite_outputs_ = 0;
-  ForceUnits units_ = ForceUnits::kUnknown;  ///< the last units reported
+  ForceUnits units_ = ForceUnits::kUnknown;                                               ///< the last units reported
   std::optional<std::uint32_t> filtered_connection_, wave_connection_, bias_connection_;  ///< in OUT
 };
 

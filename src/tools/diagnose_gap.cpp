@@ -36,11 +36,11 @@
 #include <string>
 #include <vector>
 
+#include <nav_msgs/Odometry.h>
 #include <ros/exception.h>
 #include <rosbag/bag.h>
 #include <rosbag/exceptions.h>
 #include <rosbag/view.h>
-#include <nav_msgs/Odometry.h>
 #include <sensor_msgs/Imu.h>
 #include <sensor_msgs/Temperature.h>
 
@@ -58,7 +58,8 @@ namespace sim = periodic_bias_compensation::sim;
 namespace
 {
 const char* const kUsage =
-    "usage: diagnose_gap (--real REAL.bag | --real-csv FILE --columns t=C,ax=C,...,gz=C) --sim SCENARIO.yaml --out DIR\n"
+    "usage: diagnose_gap (--real REAL.bag | --real-csv FILE --columns t=C,ax=C,...,gz=C) --sim SCENARIO.yaml --out "
+    "DIR\n"
     "         [--imu-topic imu/data] [--truth-topic ground_truth/odometry] [--temperature-topic imu/temperature]\n"
     "         [--accel-scale K] [--gyro-scale K] [--time-scale K] [--rate HZ] [--skip-lines N]\n"
     "         [--ensemble N] [--fit-fraction F] [--threads N] [--max-duration S] [--steps N] [--no-plots]\n"
@@ -67,7 +68,7 @@ const char* const kUsage =
 using periodic_bias_compensation::UsageError;
 
 /// The files diagnose_gap writes in --out (the plots aside).
-const char* const kReportFiles[] = { "report.json", "fitted_scenario.yaml", "psd.csv",  "allan.csv",
+const char* const kReportFiles[] = { "report.json", "fitted_scenario.yaml", "psd.csv",   "allan.csv",
                                      "drift.csv",   "features.csv",         "truth.csv", "report.md" };
 
 struct Options
@@ -130,7 +131,8 @@ gap::Recording readBagUnchecked(const Options& o)
       const auto& tw = msg->twist.twist;
       r.truth.stamp.push_back(msg->header.stamp.toSec());
       r.truth.position.emplace_back(p.position.x, p.position.y, p.position.z);
-      r.truth.orientation.emplace_back(Eigen::Quaterniond(p.orientation.w, p.orientation.x, p.orientation.y, p.orientation.z).normalized());
+      r.truth.orientation.emplace_back(
+          Eigen::Quaterniond(p.orientation.w, p.orientation.x, p.orientation.y, p.orientation.z).normalized());
       r.truth.velocity.emplace_back(tw.linear.x, tw.linear.y, tw.linear.z);
       r.truth.angular_velocity.emplace_back(tw.angular.x, tw.angular.y, tw.angular.z);
       r.truth.has_twist = true;
@@ -277,13 +279,15 @@ std::string reportMarkdown(const gap::Report& rep, const Options& o, bool plots)
   std::ostringstream md;
   char buf[512];
   md << "# Sim-to-real gap: " << rep.real_source << " vs " << o.scenario << "\n\n";
-  std::snprintf(buf, sizeof(buf), "%zu samples, %.6g Hz, %.1f s; ensemble of %d simulated runs; the fit saw the first %.0f %%, the gap is measured on the last %.0f %%. Wall time %.1f s.\n\n",
+  std::snprintf(buf, sizeof(buf),
+                "%zu samples, %.6g Hz, %.1f s; ensemble of %d simulated runs; the fit saw the first %.0f %%, the gap "
+                "is measured on the last %.0f %%. Wall time %.1f s.\n\n",
                 rep.samples, rep.rate, rep.duration, o.diag.ensemble, 100 * o.diag.fit_fraction,
                 100 * (1 - o.diag.fit_fraction), rep.seconds);
   md << buf;
-  md << "## Verdict\n\n**" << rep.verdict_effect << "** (confidence " << rep.confidence << ", shrink on the withheld part "
-     << static_cast<int>(std::lround(100 * rep.shrink_withheld)) << " %): " << rep.verdict_text << "\n\nparams: `"
-     << rep.verdict_params << "`\n\n";
+  md << "## Verdict\n\n**" << rep.verdict_effect << "** (confidence " << rep.confidence
+     << ", shrink on the withheld part " << static_cast<int>(std::lround(100 * rep.shrink_withheld))
+     << " %): " << rep.verdict_text << "\n\nparams: `" << rep.verdict_params << "`\n\n";
   md << "## 0. Motion (before any sensor effect)\n\n";
   const gap::MotionFit& m = rep.motion;
   if (!m.differs)
@@ -293,24 +297,31 @@ std::string reportMarkdown(const gap::Report& rep, const Options& o, bool plots)
           "sensor effects below are judged against the scenario as given.\n\n";
   else
     md << "The recording's motion **differs** from the scenario's; sensor effects below are judged against the "
-          "scenario with the recording's " << m.adopted << " (`fitted_scenario.yaml` carries it).\n\n";
+          "scenario with the recording's "
+       << m.adopted << " (`fitted_scenario.yaml` carries it).\n\n";
   for (const std::string& finding : m.findings)
     md << "- " << finding << "\n";
-  std::snprintf(buf, sizeof(buf),
-                "%s| | roll [rad] | pitch [rad] | heave Hs [m] | peak period [s] |\n|---|---|---|---|---|\n"
-                "| recording | %+.4f | %+.4f | %.3g | %.3g |\n| scenario (ensemble mean) | %+.4f | %+.4f | %.3g | %.3g |\n\n"
-                "Withheld gap against the scenario as given %.3g, against the fitted one %.3g.\n\n",
-                m.findings.empty() ? "" : "\n", m.real.roll, m.real.pitch, m.real.wave_height, m.real.peak_period,
-                m.scenario.roll, m.scenario.pitch, m.scenario.wave_height, m.scenario.peak_period, m.gap_before, m.gap_after);
+  std::snprintf(
+      buf, sizeof(buf),
+      "%s| | roll [rad] | pitch [rad] | heave Hs [m] | peak period [s] |\n|---|---|---|---|---|\n"
+      "| recording | %+.4f | %+.4f | %.3g | %.3g |\n| scenario (ensemble mean) | %+.4f | %+.4f | %.3g | %.3g |\n\n"
+      "Withheld gap against the scenario as given %.3g, against the fitted one %.3g.\n\n",
+      m.findings.empty() ? "" : "\n", m.real.roll, m.real.pitch, m.real.wave_height, m.real.peak_period,
+      m.scenario.roll, m.scenario.pitch, m.scenario.wave_height, m.scenario.peak_period, m.gap_before, m.gap_after);
   md << buf;
   md << "## 1. Where (whole recording)\n\n";
-  std::snprintf(buf, sizeof(buf), "gap %.3g; one ensemble member against the others: up to %.3g. Departures (|z| > 3), largest first:\n\n", rep.gap_all, rep.null_gap);
-  md << buf << "| axis | quantity | band / tau | segment | stage | real | sim (median) | z |\n|---|---|---|---|---|---|---|---|\n";
+  std::snprintf(
+      buf, sizeof(buf),
+      "gap %.3g; one ensemble member against the others: up to %.3g. Departures (|z| > 3), largest first:\n\n",
+      rep.gap_all, rep.null_gap);
+  md << buf
+     << "| axis | quantity | band / tau | segment | stage | real | sim (median) | z "
+        "|\n|---|---|---|---|---|---|---|---|\n";
   for (const auto& d : rep.where)
   {
     std::snprintf(buf, sizeof(buf), "| %s | %s | %s | %s | %s | %.5g | %.5g | %+.3g |\n", d.where.channel.c_str(),
-                  d.where.quantity.c_str(), d.where.range.c_str(), d.where.segment.c_str(), d.where.stage.c_str(), d.real,
-                  d.sim_median, d.z);
+                  d.where.quantity.c_str(), d.where.range.c_str(), d.where.segment.c_str(), d.where.stage.c_str(),
+                  d.real, d.sim_median, d.z);
     md << buf;
   }
   md << "\nDirectly visible effects:\n\n";
@@ -325,13 +336,17 @@ std::string reportMarkdown(const gap::Report& rep, const Options& o, bool plots)
   if (rep.has_truth)
   {
     md << "\n### Against the truth (sample by sample)\n\nReal minus the ideal IMU driven by the recording's truth "
-          "(both smoothed over " << o.diag.truth_smooth << " s), per axis and time segment, against the same residual of "
-          "every simulated run (its own truth). Departures (|z| > 3): " << rep.truth_where.size() << "\n\n"
+          "(both smoothed over "
+       << o.diag.truth_smooth
+       << " s), per axis and time segment, against the same residual of "
+          "every simulated run (its own truth). Departures (|z| > 3): "
+       << rep.truth_where.size() << "\n\n"
        << "| axis | quantity | time | segment | real | sim (median) | z |\n|---|---|---|---|---|---|---|\n";
     for (const auto& d : rep.truth_where)
     {
       std::snprintf(buf, sizeof(buf), "| %s | %s | %s | %s | %.5g | %.5g | %+.3g |\n", d.where.channel.c_str(),
-                    d.where.quantity.c_str(), d.where.range.c_str(), d.where.segment.c_str(), d.real, d.sim_median, d.z);
+                    d.where.quantity.c_str(), d.where.range.c_str(), d.where.segment.c_str(), d.real, d.sim_median,
+                    d.z);
       md << buf;
     }
     if (plots)
@@ -340,7 +355,8 @@ std::string reportMarkdown(const gap::Report& rep, const Options& o, bool plots)
     }
   }
   md << "\n## 2. Which effect (fit on the first part, judged on the withheld part)\n\n";
-  std::snprintf(buf, sizeof(buf), "Gap of the scenario as given on the withheld part: %.3g (typical member vs the rest: %.3g).\n\n",
+  std::snprintf(buf, sizeof(buf),
+                "Gap of the scenario as given on the withheld part: %.3g (typical member vs the rest: %.3g).\n\n",
                 rep.gap_before, rep.null_gap_typical);
   md << buf << "| rank | effect | gap before | gap after | shrink | fitted parameters |\n|---|---|---|---|---|---|\n";
   for (std::size_t i = 0; i < rep.ranking.size(); ++i)
@@ -355,8 +371,8 @@ std::string reportMarkdown(const gap::Report& rep, const Options& o, bool plots)
   for (std::size_t i = 0; i < rep.where_held.size(); ++i)
   {
     const auto& d = rep.where_held[i];
-    std::snprintf(buf, sizeof(buf), "| %s | %s | %s | %s | %+.3g | %s |\n", d.where.channel.c_str(), d.where.quantity.c_str(),
-                  d.where.range.c_str(), d.where.segment.c_str(), d.z,
+    std::snprintf(buf, sizeof(buf), "| %s | %s | %s | %s | %+.3g | %s |\n", d.where.channel.c_str(),
+                  d.where.quantity.c_str(), d.where.range.c_str(), d.where.segment.c_str(), d.z,
                   i < rep.where_held_after.size() ? std::to_string(rep.where_held_after[i]).c_str() : "-");
     md << buf;
   }

@@ -139,10 +139,10 @@ struct Errors
   /// |filtered - true slow| at each of kCheckpoints [m]; NaN where the run is shorter.
   std::array<Vector3, kCheckpoints.size()> slow_at{ Vector3::Constant(NAN), Vector3::Constant(NAN),
                                                     Vector3::Constant(NAN) };
-  Vector3 slow_final = Vector3::Zero();   ///< |filtered - true slow| at the end [m]
-  Vector3 total_final = Vector3::Zero();  ///< |filtered + wave - true position| at the end [m]
-  Vector3 slow_rms = Vector3::Constant(NAN);   ///< RMS(filtered - true slow) after settling [m]
-  Vector3 total_rms = Vector3::Constant(NAN);  ///< RMS(filtered + wave - true position) after settling [m]
+  Vector3 slow_final = Vector3::Zero();               ///< |filtered - true slow| at the end [m]
+  Vector3 total_final = Vector3::Zero();              ///< |filtered + wave - true position| at the end [m]
+  Vector3 slow_rms = Vector3::Constant(NAN);          ///< RMS(filtered - true slow) after settling [m]
+  Vector3 total_rms = Vector3::Constant(NAN);         ///< RMS(filtered + wave - true position) after settling [m]
   Vector3 wave_rms_percent = Vector3::Constant(NAN);  ///< RMS(wave - true wave) / RMS(true wave) [%]
   /// RMS(wave - true wave) / significant wave height [%], Hs = 4 std(true wave) per axis (for z the
   /// usual significant wave height of heave).
@@ -154,7 +154,9 @@ struct Errors
 class Scorer
 {
 public:
-  Scorer(const sim::Sample& first, double settle) : slow0_(first.truth.slow_position), settle_(settle) {}
+  Scorer(const sim::Sample& first, double settle) : slow0_(first.truth.slow_position), settle_(settle)
+  {
+  }
 
   void add(const sim::Sample& s, const Vector3& slow, const Vector3& wave)
   {
@@ -491,8 +493,7 @@ std::string seedPath(std::string pattern, int seed)
 
 double median(std::vector<double> values)
 {
-  values.erase(std::remove_if(values.begin(), values.end(), [](double v) { return !std::isfinite(v); }),
-               values.end());
+  values.erase(std::remove_if(values.begin(), values.end(), [](double v) { return !std::isfinite(v); }), values.end());
   if (values.empty())
     return NAN;
   std::sort(values.begin(), values.end());

@@ -117,8 +117,8 @@ std::string cannotWrite(const std::string& path, int error)
   const std::string dir = parent.empty() ? std::string(".") : parent.string();
   std::error_code ec;
   const bool no_directory = error == ENOENT && !fs::is_directory(dir, ec);
-  const std::string why = no_directory ? "directory '" + dir + "' does not exist" :
-                                         std::string(std::strerror(error)) + " (in directory '" + dir + "')";
+  const std::string why = no_directory ? "directory '" + dir + "' does not exist"
+                                       : std::string(std::strerror(error)) + " (in directory '" + dir + "')";
   return "cannot write output '" + path + "': " + why;
 }
 
@@ -270,8 +270,8 @@ void prepareOutputDirectory(const std::string& dir)
   fs::create_directories(dir, ec);
   if (ec || !fs::is_directory(dir))
   {
-    throw std::runtime_error("cannot write output directory '" + dir + "': " +
-                             (ec ? ec.message() : std::string("it is not a directory")));
+    throw std::runtime_error("cannot write output directory '" + dir +
+                             "': " + (ec ? ec.message() : std::string("it is not a directory")));
   }
   // Writable: a file can be created in it (also for root, whom permissions do not stop).
   const std::string probe = (fs::path(dir) / (".write-check-" + std::to_string(::getpid()))).string();

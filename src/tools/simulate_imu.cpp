@@ -196,8 +196,8 @@ int run(const Options& o)
   }
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   std::cerr << "simulate_imu: " << simulator.sampleCount() << " samples (" << dropped << " dropped), "
-            << simulator.scenario().duration << " s at " << simulator.scenario().rate << " Hz, seed " << seed
-            << ", " << seconds << " s wall";
+            << simulator.scenario().duration << " s at " << simulator.scenario().rate << " Hz, seed " << seed << ", "
+            << seconds << " s wall";
   if (bag)
   {
     std::cerr << " -> " << o.bag;

@@ -281,8 +281,8 @@ Detectability effectShift(const gap::Recording& real, gap::Recording twin, const
     d.max_z = std::max(d.max_z, std::abs(z[i]));
   }
   d.gap = gap::gapOf(z);
-  d.detectable = d.gap > 1.5 * rep.null_gap_held ||
-                 d.max_z > std::max(1.5 * rep.null_max_z_held, 2.0 * gap::kZThreshold);
+  d.detectable =
+      d.gap > 1.5 * rep.null_gap_held || d.max_z > std::max(1.5 * rep.null_max_z_held, 2.0 * gap::kZThreshold);
   return d;
 }
 
@@ -301,7 +301,7 @@ std::vector<double> paramOf(const sim::Scenario& s, const std::string& effect, c
 /// Effects the foreign generator below writes.
 const std::vector<std::string>& foreignEffects()
 {
-  static const std::vector<std::string> e = { "constant_bias", "periodic_bias", "vibration",
+  static const std::vector<std::string> e = { "constant_bias", "periodic_bias",    "vibration",
                                               "white_noise",   "bias_random_walk", "quantization" };
   return e;
 }
@@ -601,11 +601,12 @@ std::vector<CaseResult> runCases(const Options& opt, const Grid& grid)
         const CaseResult cr = runCase(c, base, opt.verbose);
         if (!opt.quiet)
         {
-          std::fprintf(stderr, "%-9s %-17s size %.1f seed %5d -> %-30s conf %.2f shrink %5.1f %% gap %.3g (null %.3g) "
+          std::fprintf(stderr,
+                       "%-9s %-17s size %.1f seed %5d -> %-30s conf %.2f shrink %5.1f %% gap %.3g (null %.3g) "
                        "shift %.3g/%.3g%s %.1f s\n",
                        motion.c_str(), effect.c_str(), k, cr.seed, cr.verdict.c_str(), cr.confidence, 100 * cr.shrink,
-                       cr.gap_before, cr.null_gap, cr.effect_gap, cr.effect_max_z, cr.detectable ? "" : " (undetectable)",
-                       cr.seconds);
+                       cr.gap_before, cr.null_gap, cr.effect_gap, cr.effect_max_z,
+                       cr.detectable ? "" : " (undetectable)", cr.seconds);
         }
         results.push_back(cr);
       }
@@ -695,8 +696,11 @@ std::string summaryMarkdown(const Options& opt, const Grid& grid, std::size_t ca
                 s.det_ok, s.det, 100 * s.accuracy, 100 * s.median_shrink, s.nulls, s.null_confident);
   md << buf;
   const std::vector<double>& shrinks = s.shrinks;
-  auto quantile = [&shrinks](double p) { return shrinks.empty() ? 0.0 : shrinks[static_cast<std::size_t>(p * (shrinks.size() - 1))]; };
-  std::snprintf(buf, sizeof(buf), "shrink when named correctly: p10 %.0f %%, p25 %.0f %%, median %.0f %%, min %.0f %%\n\n",
+  auto quantile = [&shrinks](double p) {
+    return shrinks.empty() ? 0.0 : shrinks[static_cast<std::size_t>(p * (shrinks.size() - 1))];
+  };
+  std::snprintf(buf, sizeof(buf),
+                "shrink when named correctly: p10 %.0f %%, p25 %.0f %%, median %.0f %%, min %.0f %%\n\n",
                 100 * quantile(0.1), 100 * quantile(0.25), 100 * quantile(0.5), 100 * quantile(0.0));
   md << buf;
   md << "Detectable (stated before the runs, the same test for every case): the withheld effect ALONE (real "
@@ -753,7 +757,8 @@ std::string casesMarkdown(const std::vector<CaseResult>& results, const Scores& 
   {
     if (c.effect != "none" && c.detectable && !named(c))
     {
-      std::snprintf(buf, sizeof(buf), "\n- %s, %s, size %.1f, seed %d: verdict %s (confidence %.2f, gap %.3g, null %.3g, "
+      std::snprintf(buf, sizeof(buf),
+                    "\n- %s, %s, size %.1f, seed %d: verdict %s (confidence %.2f, gap %.3g, null %.3g, "
                     "effect's own shift: gap %.3g, |z| %.3g)",
                     c.effect.c_str(), c.motion.c_str(), c.size, c.seed, c.verdict.c_str(), c.confidence, c.gap_before,
                     c.null_gap, c.effect_gap, c.effect_max_z);

@@ -50,8 +50,9 @@ int main(int argc, char** argv)
     rosbag::Bag bag(in, rosbag::bagmode::Read);
     // compensate_bag accepts "imu/data" and "/imu/data" for the same topic.
     const std::string absolute = topic.front() == '/' ? topic : "/" + topic;
-    std::unique_ptr<rosbag::View> view = whole_bag ? std::make_unique<rosbag::View>(bag) :
-                                                     std::make_unique<rosbag::View>(bag, rosbag::TopicQuery({ topic, absolute }));
+    std::unique_ptr<rosbag::View> view =
+        whole_bag ? std::make_unique<rosbag::View>(bag)
+                  : std::make_unique<rosbag::View>(bag, rosbag::TopicQuery({ topic, absolute }));
     std::int64_t messages = 0, read = 0;
     double checksum = 0.0;
     std::vector<std::uint8_t> bytes;

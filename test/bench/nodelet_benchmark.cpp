@@ -35,10 +35,10 @@
 #include <nav_msgs/Odometry.h>
 #include <nodelet/loader.h>
 #include <nodelet/nodelet.h>
-#include <pluginlib/class_loader.hpp>
 #include <ros/ros.h>
 #include <sensor_msgs/Imu.h>
 #include <unistd.h>
+#include <pluginlib/class_loader.hpp>
 
 #include "periodic_bias_compensation/ros/sim_messages.h"
 #include "periodic_bias_compensation/sim/simulator.h"
@@ -50,10 +50,10 @@ using Clock = std::chrono::steady_clock;
 
 namespace
 {
-constexpr std::int64_t kInFlight = 500;          ///< closed loop: unanswered inputs at most
-constexpr std::size_t kCachedSamples = 60000;    ///< samples simulated once and replayed
+constexpr std::int64_t kInFlight = 500;              ///< closed loop: unanswered inputs at most
+constexpr std::size_t kCachedSamples = 60000;        ///< samples simulated once and replayed
 constexpr std::size_t kRing = std::size_t(1) << 20;  ///< publish times kept (ring, by k)
-constexpr std::uint32_t kStampSec = 1700000000;  ///< t0 [s], a Unix-like time
+constexpr std::uint32_t kStampSec = 1700000000;      ///< t0 [s], a Unix-like time
 
 struct Options
 {
@@ -176,7 +176,9 @@ private:
 class BenchSource : public nodelet::Nodelet
 {
 public:
-  explicit BenchSource(const Options& o) : options_(o), published_(kRing) {}
+  explicit BenchSource(const Options& o) : options_(o), published_(kRing)
+  {
+  }
 
   ~BenchSource() override
   {
@@ -216,9 +218,9 @@ public:
     std::cout << "transport=" << options_.transport << " mode=" << (options_.closed_loop ? "closed" : "paced")
               << " rate=" << options_.rate << " sent=" << sent_ << " received=" << received_
               << " dropped=" << sent_ - received_ << " send_wall_s=" << wall
-              << " input_rate=" << static_cast<double>(sent_) / wall
-              << " p50_us=" << latency_.quantile(0.5) * 1e6 << " p99_us=" << latency_.quantile(0.99) * 1e6
-              << " max_us=" << max_latency_ * 1e6 << " rss_kb=" << rssKilobytes() << std::endl;
+              << " input_rate=" << static_cast<double>(sent_) / wall << " p50_us=" << latency_.quantile(0.5) * 1e6
+              << " p99_us=" << latency_.quantile(0.99) * 1e6 << " max_us=" << max_latency_ * 1e6
+              << " rss_kb=" << rssKilobytes() << std::endl;
     if (!options_.rss_csv.empty())
     {
       std::ofstream csv(options_.rss_csv);
@@ -282,7 +284,8 @@ private:
       }
       else
       {
-        std::this_thread::sleep_until(start_ + std::chrono::nanoseconds(static_cast<std::int64_t>(1e9 * k / options_.rate)));
+        std::this_thread::sleep_until(start_ +
+                                      std::chrono::nanoseconds(static_cast<std::int64_t>(1e9 * k / options_.rate)));
       }
       {
         std::lock_guard<std::mutex> lock(mutex_);
@@ -298,11 +301,13 @@ private:
   void outputCallback(const nav_msgs::Odometry::ConstPtr& msg)
   {
     const auto now = Clock::now();
-    const auto k = static_cast<std::int64_t>(std::llround((msg->header.stamp - ros::Time(kStampSec, 0)).toSec() * options_.rate));
+    const auto k =
+        static_cast<std::int64_t>(std::llround((msg->header.stamp - ros::Time(kStampSec, 0)).toSec() * options_.rate));
     std::lock_guard<std::mutex> lock(mutex_);
     if (k >= 0 && k < sent_ && sent_ - k <= static_cast<std::int64_t>(kRing))
     {
-      const double latency = std::chrono::duration<double>(now - published_[static_cast<std::size_t>(k) % kRing]).count();
+      const double latency =
+          std::chrono::duration<double>(now - published_[static_cast<std::size_t>(k) % kRing]).count();
       latency_.add(latency);
       max_latency_ = std::max(max_latency_, latency);
     }
@@ -327,7 +332,7 @@ private:
   std::thread thread_;
   std::atomic<bool> stop_{ false };
 
-  std::mutex mutex_;  ///< guards everything below
+  std::mutex mutex_;                          ///< guards everything below
   std::vector<Clock::time_point> published_;  ///< by k, in a ring
   std::condition_variable answered_;
   std::int64_t sent_ = 0;
@@ -357,8 +362,7 @@ std::optional<Options> parseOptions(int argc, char** argv)
       .integer("--rss-every", &o.rss_every);
   if (!cli.parse(argc, argv))
     return std::nullopt;
-  if ((o.transport != "intra" && o.transport != "tcp") || o.scenario.empty() || !(o.rate > 0.0) ||
-      !(o.duration > 0.0))
+  if ((o.transport != "intra" && o.transport != "tcp") || o.scenario.empty() || !(o.rate > 0.0) || !(o.duration > 0.0))
     throw pbc::UsageError("--transport intra|tcp, --scenario, --rate > 0 and --duration > 0 are required");
   return o;
 }

@@ -14,14 +14,14 @@ namespace test
 {
 struct Shake
 {
-  double rate = 87.7;                   ///< [Hz]
-  double duration = 60.0;               ///< [s]
-  Vector3 amplitude{ 0.05, 0.0, 0.0 };  ///< displacement amplitude per axis [m]
+  double rate = 87.7;                        ///< [Hz]
+  double duration = 60.0;                    ///< [s]
+  Vector3 amplitude{ 0.05, 0.0, 0.0 };       ///< displacement amplitude per axis [m]
   Vector3 frequency{ 0.443, 0.476, 0.443 };  ///< [Hz]
-  Vector3 phase{ 0.3, 1.1, 2.0 };       ///< [rad]
-  Vector3 bias{ 0.02, -0.01, 0.015 };   ///< constant accelerometer bias [m/s^2]
-  double noise_density = 0.003;         ///< white accelerometer noise [m/s^2/sqrt(Hz)]
-  double chirp = 0.0;                   ///< linear frequency drift [Hz/s]
+  Vector3 phase{ 0.3, 1.1, 2.0 };            ///< [rad]
+  Vector3 bias{ 0.02, -0.01, 0.015 };        ///< constant accelerometer bias [m/s^2]
+  double noise_density = 0.003;              ///< white accelerometer noise [m/s^2/sqrt(Hz)]
+  double chirp = 0.0;                        ///< linear frequency drift [Hz/s]
   unsigned seed = 1;
   bool with_orientation = true;
 };

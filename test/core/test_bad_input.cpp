@@ -29,7 +29,8 @@ bool finiteOutput(const CompensatorOutput& o)
 }
 
 /// Feeds `count` good samples from the record starting at `first`, checking every output.
-void feed(Compensator& c, const pbc::test::ShakeRecord& r, std::size_t first, std::size_t count, double time_shift = 0.0)
+void feed(Compensator& c, const pbc::test::ShakeRecord& r, std::size_t first, std::size_t count,
+          double time_shift = 0.0)
 {
   CompensatorOutput out;
   for (std::size_t k = first; k < first + count && k < r.samples.size(); ++k)
@@ -115,9 +116,9 @@ TEST(BadInput, AccelerationInGIsRecognised)
 {
   // A driver publishing g instead of m/s^2 (REP-145): the mean specific force says so after
   // kUnitsSettle; in m/s^2 it is plausible; 30 m/s^2 at rest is neither.
-  for (const auto& [scale, units] : { std::pair{ 1.0 / pbc::kStandardGravity, pbc::ForceUnits::kLooksLikeG },
-                                      std::pair{ 1.0, pbc::ForceUnits::kPlausible },
-                                      std::pair{ 3.0, pbc::ForceUnits::kImplausible } })
+  for (const auto& [scale, units] :
+       { std::pair{ 1.0 / pbc::kStandardGravity, pbc::ForceUnits::kLooksLikeG },
+         std::pair{ 1.0, pbc::ForceUnits::kPlausible }, std::pair{ 3.0, pbc::ForceUnits::kImplausible } })
   {
     const auto r = record();
     Compensator c;
@@ -216,11 +217,11 @@ TEST(BadInput, LoneTimingGlitchesAreDroppedNotAReset)
     double stamp;
     SampleStatus status;
   };
-  for (const Glitch& g : { Glitch{ "5 s in the past", r.samples[2000].t - 5.0, SampleStatus::kHeld },
-                           Glitch{ "stamped 0", 0.0, SampleStatus::kHeld },
-                           Glitch{ "5 s in the future", r.samples[2000].t + 5.0, SampleStatus::kHeld },
-                           Glitch{ "1 ms after its predecessor", r.samples[1999].t + 0.001,
-                                   SampleStatus::kRejectedEarly } })
+  for (const Glitch& g :
+       { Glitch{ "5 s in the past", r.samples[2000].t - 5.0, SampleStatus::kHeld },
+         Glitch{ "stamped 0", 0.0, SampleStatus::kHeld },
+         Glitch{ "5 s in the future", r.samples[2000].t + 5.0, SampleStatus::kHeld },
+         Glitch{ "1 ms after its predecessor", r.samples[1999].t + 0.001, SampleStatus::kRejectedEarly } })
   {
     Compensator glitched, clean;
     feed(glitched, r, 0, 2000);

@@ -184,7 +184,8 @@ TEST(BroadbandWave, TurnHandsTheVerticalToTheFixedFilterAndBack)
   EXPECT_GT(fixed_gap_after, 0.05) << "the spectral estimate is back";
   EXPECT_LT(std::sqrt(error2 / truth2), 0.15);
   EXPECT_LT(error2, 0.5 * fixed_error2);
-  std::printf("error from 180 s after the turn: spectral %.3f, fixed filter %.3f of the RMS\n", std::sqrt(error2 / truth2), std::sqrt(fixed_error2 / truth2));
+  std::printf("error from 180 s after the turn: spectral %.3f, fixed filter %.3f of the RMS\n",
+              std::sqrt(error2 / truth2), std::sqrt(fixed_error2 / truth2));
 }
 
 // A long swell that the harmonic model, locked to a shorter period, fits in acceleration but
@@ -233,10 +234,11 @@ TEST(BroadbandWave, ModelLockedElsewhereGivesWayToTheBroadbandEstimate)
     harmonic2 += (in.harmonic_position - x) * (in.harmonic_position - x);
     smallest_weight = std::min(smallest_weight, out.weight);
   }
-  std::printf("model locked elsewhere: smallest share %.2f, RMS error blended %.3f, broadband %.3f, "
-              "harmonic %.3f m\n",
-              smallest_weight, std::sqrt(blended2 / (600 * kRate)), std::sqrt(broadband2 / (600 * kRate)),
-              std::sqrt(harmonic2 / (600 * kRate)));
+  std::printf(
+      "model locked elsewhere: smallest share %.2f, RMS error blended %.3f, broadband %.3f, "
+      "harmonic %.3f m\n",
+      smallest_weight, std::sqrt(blended2 / (600 * kRate)), std::sqrt(broadband2 / (600 * kRate)),
+      std::sqrt(harmonic2 / (600 * kRate)));
   EXPECT_GT(smallest_weight, 0.8);
   EXPECT_LT(blended2, 4.0 * broadband2);
 }

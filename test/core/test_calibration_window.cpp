@@ -111,7 +111,8 @@ TEST(CalibrationWindow, MeanForceAndLevelAxes)
   window.add(sampleAt(0.04, Vector3(0.2, 0.1, 9.8), false), 0.02, 10.0);
   window.meanSpecificForce(&any_without);
   EXPECT_TRUE(any_without);
-  const auto axes = window.levelAxes([](const ImuSample& s) -> Vector3 { return s.specific_force - Vector3(0, 0, 9.8); });
+  const auto axes =
+      window.levelAxes([](const ImuSample& s) -> Vector3 { return s.specific_force - Vector3(0, 0, 9.8); });
   ASSERT_EQ(axes[1].size(), 3u);
   EXPECT_NEAR(axes[0][1], 0.3, 1e-12);
   EXPECT_NEAR(axes[1][2], 0.1, 1e-12);

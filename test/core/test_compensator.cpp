@@ -18,10 +18,10 @@ namespace
 {
 struct RunResult
 {
-  Vector3 final_filtered{ 0, 0, 0 };   ///< |filtered position - true slow position (0)| at the end [m]
-  Vector3 wave_rms_error{ 0, 0, 0 };   ///< RMS(wave - truth) after 20 s [m]
-  Vector3 wave_rms_truth{ 0, 0, 0 };   ///< RMS(truth) after 20 s [m]
-  Vector3 raw_final{ 0, 0, 0 };        ///< plain double integration of the level acceleration [m]
+  Vector3 final_filtered{ 0, 0, 0 };  ///< |filtered position - true slow position (0)| at the end [m]
+  Vector3 wave_rms_error{ 0, 0, 0 };  ///< RMS(wave - truth) after 20 s [m]
+  Vector3 wave_rms_truth{ 0, 0, 0 };  ///< RMS(truth) after 20 s [m]
+  Vector3 raw_final{ 0, 0, 0 };       ///< plain double integration of the level acceleration [m]
   bool finite = true;
 };
 
@@ -162,10 +162,11 @@ TEST(Compensator, PaperScenarioOrdersOfMagnitude)
   const auto ours = evaluate(shaken, modeConfig(Mode::kDefault), false);
   for (int i = 0; i < 3; ++i)
   {
-    std::printf("axis %d after 60 s: raw %.2f m | constant at rest %.3f m | shaken: constant %.3f m, "
-                "periodic (paper) %.4f m (rms %.4f), default %.4f m (rms %.4f)\n",
-                i, raw.raw_final[i], constant_at_rest.first[i], constant_shaken.first[i], periodic.first[i],
-                periodic.second[i], ours.first[i], ours.second[i]);
+    std::printf(
+        "axis %d after 60 s: raw %.2f m | constant at rest %.3f m | shaken: constant %.3f m, "
+        "periodic (paper) %.4f m (rms %.4f), default %.4f m (rms %.4f)\n",
+        i, raw.raw_final[i], constant_at_rest.first[i], constant_shaken.first[i], periodic.first[i], periodic.second[i],
+        ours.first[i], ours.second[i]);
     EXPECT_GT(raw.raw_final[i], 10.0) << "tens of metres of raw drift";
     EXPECT_GT(raw.raw_final[i], 5.0 * constant_at_rest.first[i]) << "raw >> constant";
     EXPECT_GT(constant_shaken.first[i], 10.0 * periodic.first[i]) << "constant >> periodic";

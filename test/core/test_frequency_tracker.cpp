@@ -101,8 +101,7 @@ TEST(FrequencyTracker, DecimationFiltersAliasesOut)
   // filter it would fold onto 1.3 Hz and win; the triangular filter takes it down by ~25 dB.
   FrequencyTracker tracker(3000, 100.0, 10);
   for (int k = 0; k < 3000; ++k)
-    tracker.push(1.0 * std::sin(2 * M_PI * 8.7 * k / 100.0) + 0.5 * std::sin(2 * M_PI * 0.12 * k / 100.0),
-                 k / 100.0);
+    tracker.push(1.0 * std::sin(2 * M_PI * 8.7 * k / 100.0) + 0.5 * std::sin(2 * M_PI * 0.12 * k / 100.0), k / 100.0);
   const FrequencyEstimate e = tracker.analyse(0.05, 2.0, 30.0);
   ASSERT_TRUE(e.locked);
   EXPECT_NEAR(e.frequency, 0.12, 0.002);

@@ -68,10 +68,11 @@ TEST(GainTuning, TunedGainsHelpOnARunTheyWereNotTunedOn)
   const Vector3 after = slowMotionRms(held_out.samples, tuned);
   for (int i = 0; i < 3; ++i)
   {
-    std::printf("[gain tuning] axis %d: training %.5f -> %.5f m, held-out %.5f -> %.5f m "
-                "(alpha_v %.2f beta_v %.1f alpha_p %.2f beta_p %.1f)\n",
-                i, result.score_start[i], result.score[i], before[i], after[i], result.gains[i].alpha_v,
-                result.gains[i].beta_v, result.gains[i].alpha_p, result.gains[i].beta_p);
+    std::printf(
+        "[gain tuning] axis %d: training %.5f -> %.5f m, held-out %.5f -> %.5f m "
+        "(alpha_v %.2f beta_v %.1f alpha_p %.2f beta_p %.1f)\n",
+        i, result.score_start[i], result.score[i], before[i], after[i], result.gains[i].alpha_v, result.gains[i].beta_v,
+        result.gains[i].alpha_p, result.gains[i].beta_p);
     EXPECT_LT(after[i], 0.5 * before[i]) << "axis " << i;
   }
   EXPECT_EQ(result.runs, 1 + 2 * 2 * 7 * 9);

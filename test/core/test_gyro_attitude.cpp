@@ -28,11 +28,11 @@ double tiltError(const Quaternion& estimate, const Quaternion& truth)
 /// A hull rolling and pitching about a tilted mean, with wave accelerations on the level axes.
 struct RollingHull
 {
-  double roll_amplitude = 0.1;   // [rad]
-  double pitch_amplitude = 0.05; // [rad]
-  double period = 8.0;           // [s]
+  double roll_amplitude = 0.1;     // [rad]
+  double pitch_amplitude = 0.05;   // [rad]
+  double period = 8.0;             // [s]
   double wave_acceleration = 0.5;  // [m/s^2] horizontal, at the wave period
-  Vector3 gyro_bias{ 0, 0, 0 };  // [rad/s]
+  Vector3 gyro_bias{ 0, 0, 0 };    // [rad/s]
 
   double w() const
   {
@@ -67,8 +67,7 @@ struct RollingHull
   {
     pbc::ImuSample s;
     s.t = t;
-    s.specific_force =
-        attitude(t).conjugate() * (levelAcceleration(t) + Vector3(0, 0, pbc::kStandardGravity));
+    s.specific_force = attitude(t).conjugate() * (levelAcceleration(t) + Vector3(0, 0, pbc::kStandardGravity));
     s.angular_rate = rate(t) + gyro_bias;
     s.has_orientation = false;
     return s;
@@ -204,8 +203,8 @@ TEST(GyroAttitude, AtRestTheGyroIsNotIntegrated)
     const double t = k / kRate;
     const Vector3 wander = 5e-4 * Vector3(std::sin(2.0 * M_PI * t / 60.0), std::cos(2.0 * M_PI * t / 90.0), 0.0);
     const Vector3 rate = bias + wander + 0.006 * Vector3(normal(rng), normal(rng), normal(rng));
-    const Vector3 force = tilt.conjugate() * Vector3(0, 0, pbc::kStandardGravity) +
-                          0.04 * Vector3(normal(rng), normal(rng), normal(rng));
+    const Vector3 force =
+        tilt.conjugate() * Vector3(0, 0, pbc::kStandardGravity) + 0.04 * Vector3(normal(rng), normal(rng), normal(rng));
     attitude.update(rate, force, k == 0 ? 0.0 : 1.0 / kRate);
     if (t >= 60.0)
     {

@@ -77,8 +77,8 @@ double filtered(const std::vector<Wave>& waves, double t, double corner)
   for (const Wave& w : waves)
   {
     const double omega = 2.0 * M_PI * w.frequency;
-    x += w.amplitude * std::imag(transfer(omega, 2.0 * M_PI * corner) *
-                                 std::exp(std::complex<double>(0.0, omega * t + w.phase)));
+    x += w.amplitude *
+         std::imag(transfer(omega, 2.0 * M_PI * corner) * std::exp(std::complex<double>(0.0, omega * t + w.phase)));
   }
   return x;
 }
@@ -169,8 +169,8 @@ TEST(HeaveFilter, CompensatorHeaveOnASeaOfSeveralComponents)
       const double t = k / rate;
       ImuSample s;
       s.t = 1000.0 + t;
-      s.specific_force = Vector3(noise(rng), noise(rng),
-                                 kStandardGravity + 0.012 + acceleration(waves, t) + noise(rng));
+      s.specific_force =
+          Vector3(noise(rng), noise(rng), kStandardGravity + 0.012 + acceleration(waves, t) + noise(rng));
       s.has_orientation = true;
       CompensatorOutput out;
       if (!producedOutput(compensator.addSample(s, &out)) || t < 20.0)

@@ -45,9 +45,8 @@ TEST(LeverArm, PitchAboutATrimIsTheOscillationOfRr)
     const Eigen::Vector3d at_trim = attitude(0.0, trim, yaw) * r;
     const Eigen::Vector3d truth = attitude(0.0, pitch, yaw) * r - at_trim;
     const double rate_of_pitch = amplitude * w * std::cos(w * t);
-    const Eigen::Vector3d truth_velocity =
-        attitude(0.0, pitch, yaw).toRotationMatrix() *
-        (Eigen::Vector3d(0.0, rate_of_pitch, 0.0).cross(r));  // body rate about y
+    const Eigen::Vector3d truth_velocity = attitude(0.0, pitch, yaw).toRotationMatrix() *
+                                           (Eigen::Vector3d(0.0, rate_of_pitch, 0.0).cross(r));  // body rate about y
     error2 += (out.position - truth).squaredNorm();
     truth2 += truth.squaredNorm();
     velocity_error2 += (out.velocity - truth_velocity).squaredNorm();

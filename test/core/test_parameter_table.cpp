@@ -32,8 +32,8 @@ ParameterValue otherValue(const pbc::Parameter<CompensatorConfig>& p)
     case ParameterType::kBool:
       return !std::get<bool>(d);
     case ParameterType::kInt:
-      return std::get<int>(d) == static_cast<int>(p.range.lowest()) ? std::get<int>(d) + 1 :
-                                                                      static_cast<int>(p.range.lowest());
+      return std::get<int>(d) == static_cast<int>(p.range.lowest()) ? std::get<int>(d) + 1
+                                                                    : static_cast<int>(p.range.lowest());
     case ParameterType::kDouble:
       return p.range.lowest() != std::get<double>(d) ? p.range.lowest() : std::nextafter(p.range.lowest(), 1e300);
     case ParameterType::kString:
@@ -124,8 +124,8 @@ TEST(ParameterTable, RangesAreWhatValidateAccepts)
       if (!std::isfinite(inside))
         continue;
       EXPECT_TRUE(pbc::checkRanges(table(), with(inside), &why)) << p.key << " = " << inside << ": " << why;
-      const double outside = step > 0 ? inside + (inside == p.range.lowest() ? -step : step) :
-                                        std::nextafter(inside, inside == p.range.lowest() ? -1e300 : 1e300);
+      const double outside = step > 0 ? inside + (inside == p.range.lowest() ? -step : step)
+                                      : std::nextafter(inside, inside == p.range.lowest() ? -1e300 : 1e300);
       if (p.type == ParameterType::kInt && std::abs(outside) > std::numeric_limits<int>::max())
         continue;
       why.clear();

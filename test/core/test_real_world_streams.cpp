@@ -6,9 +6,9 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <random>
@@ -30,28 +30,28 @@ namespace
 /// sinusoidal bias per axis, and optionally a sinusoidal motion on one axis.
 struct Stream
 {
-  double rate = 100.0;               ///< [Hz]
-  double duration = 600.0;           ///< [s]
-  double noise_density = 0.004;      ///< [m/s^2/sqrt(Hz)]
-  Vector3 bias{ 0, 0, 0 };           ///< [m/s^2]
-  double random_walk = 0.0;          ///< [m/s^2/sqrt(s)]
-  Vector3 drift_amplitude{ 0, 0, 0 };  ///< slow periodic bias [m/s^2]
-  Vector3 drift_period{ 60, 120, 240 };  ///< [s]
-  Vector3 drift_phase{ 0, 0, 0 };    ///< [rad]
-  int shaken_axis = -1;              ///< -1: at rest
-  double amplitude = 0.0;            ///< motion amplitude [m]
-  double frequency = 0.0;            ///< [Hz]
+  double rate = 100.0;                     ///< [Hz]
+  double duration = 600.0;                 ///< [s]
+  double noise_density = 0.004;            ///< [m/s^2/sqrt(Hz)]
+  Vector3 bias{ 0, 0, 0 };                 ///< [m/s^2]
+  double random_walk = 0.0;                ///< [m/s^2/sqrt(s)]
+  Vector3 drift_amplitude{ 0, 0, 0 };      ///< slow periodic bias [m/s^2]
+  Vector3 drift_period{ 60, 120, 240 };    ///< [s]
+  Vector3 drift_phase{ 0, 0, 0 };          ///< [rad]
+  int shaken_axis = -1;                    ///< -1: at rest
+  double amplitude = 0.0;                  ///< motion amplitude [m]
+  double frequency = 0.0;                  ///< [Hz]
   double gravity = pbc::kStandardGravity;  ///< the true local gravity [m/s^2]
   unsigned seed = 1;
 };
 
 struct Outcome
 {
-  double max_wave = 0.0;          ///< largest |odometry/wave| over all axes [m]
-  double max_filtered = 0.0;      ///< largest |odometry/filtered - its first published value| [m]
-  double max_filtered_20 = 0.0;   ///< the same in the first 20 s
-  double wave_error = 0.0;        ///< RMS wave error on the shaken axis after 20 s / true RMS
-  double slow_error = 0.0;        ///< |odometry/filtered| at the end, largest axis [m]
+  double max_wave = 0.0;         ///< largest |odometry/wave| over all axes [m]
+  double max_filtered = 0.0;     ///< largest |odometry/filtered - its first published value| [m]
+  double max_filtered_20 = 0.0;  ///< the same in the first 20 s
+  double wave_error = 0.0;       ///< RMS wave error on the shaken axis after 20 s / true RMS
+  double slow_error = 0.0;       ///< |odometry/filtered| at the end, largest axis [m]
 };
 
 /// Largest |odometry/wave| and odometry/filtered excursion from the first output so far; returns
@@ -314,8 +314,8 @@ TEST(RealWorldStreams, RealIMUsAtRestInventNoMotion)
                                { 0, 1, 2, 3, 4, 5, 6 }, pbc::kStandardGravity, kDegree, 100.0);
   const auto mpu_short = readAtRest(data / "mpu6050_static" / "imu_static_test.csv", 5, { -1, 3, 4, 5, 0, 1, 2 },
                                     pbc::kStandardGravity / 16384.0, kDegree / 131.0, 100.0);
-  const auto mpu_long = readAtRest(data / "mpu6050_static" / "example_data_tinit_calc.csv", 5,
-                                   { -1, 3, 4, 5, 0, 1, 2 }, pbc::kStandardGravity / 16384.0, kDegree / 131.0, 100.0);
+  const auto mpu_long = readAtRest(data / "mpu6050_static" / "example_data_tinit_calc.csv", 5, { -1, 3, 4, 5, 0, 1, 2 },
+                                   pbc::kStandardGravity / 16384.0, kDegree / 131.0, 100.0);
   ASSERT_GT(adis.size(), 50000u);
   ASSERT_GT(mpu_short.size(), 9000u);
   ASSERT_GT(mpu_long.size(), 40000u);
@@ -425,8 +425,8 @@ TEST(RealWorldStreams, MooredBroadSeaHeave)
     const double walk = mooredHeaveError(seed, 6e-4, 900.0);
     RecordProperty("heave_error_percent_hs_clean_" + std::to_string(seed), std::to_string(clean));
     RecordProperty("heave_error_percent_hs_random_walk_" + std::to_string(seed), std::to_string(walk));
-    std::printf("[moored JONSWAP, seed %u] heave error %.2f %% of Hs clean, %.2f %% with the random walk\n", seed, clean,
-                walk);
+    std::printf("[moored JONSWAP, seed %u] heave error %.2f %% of Hs clean, %.2f %% with the random walk\n", seed,
+                clean, walk);
     EXPECT_LT(clean, 5.0) << "seed " << seed;
     walks.push_back(walk);
   }
@@ -664,13 +664,14 @@ TEST(RealWorldStreams, MooredHullWithLeverArm)
   {
     const HullErrors with = mooredHullWithLeverArm(seed, Vector3(-5.0, 1.0, 4.0));
     const HullErrors without = mooredHullWithLeverArm(seed, Vector3::Zero());
-    std::printf("[moored hull, IMU on a lever arm, seed %u] surge %.2f %%, sway %.2f %% of the true RMS, heave "
-                "%.2f %% of Hs (lever arm not configured: %.1f %%, %.1f %%, %.2f %%)\n",
-                seed, with.wave.x(), with.wave.y(), with.wave.z(), without.wave.x(), without.wave.y(),
-                without.wave.z());
+    std::printf(
+        "[moored hull, IMU on a lever arm, seed %u] surge %.2f %%, sway %.2f %% of the true RMS, heave "
+        "%.2f %% of Hs (lever arm not configured: %.1f %%, %.1f %%, %.2f %%)\n",
+        seed, with.wave.x(), with.wave.y(), with.wave.z(), without.wave.x(), without.wave.y(), without.wave.z());
     for (int j = 0; j < 3; ++j)
     {
-      RecordProperty("lever_wave_error_" + std::to_string(j) + "_" + std::to_string(seed), std::to_string(with.wave[j]));
+      RecordProperty("lever_wave_error_" + std::to_string(j) + "_" + std::to_string(seed),
+                     std::to_string(with.wave[j]));
       RecordProperty("no_lever_wave_error_" + std::to_string(j) + "_" + std::to_string(seed),
                      std::to_string(without.wave[j]));
       EXPECT_LT(with.wave[j], 0.7 * without.wave[j]) << "axis " << j << ", seed " << seed;
@@ -692,10 +693,10 @@ TEST(RealWorldStreams, HullYawingInWavesKeepsSurgeAndSway)
   {
     const HullErrors yawing = mooredHullWithLeverArm(seed, Vector3::Zero(), 0.12, Vector3::Zero());
     const HullErrors steady = mooredHullWithLeverArm(seed, Vector3::Zero(), 0.0, Vector3::Zero());
-    std::printf("[moored hull yawing 0.12 rad, seed %u] surge %.1f %%, sway %.1f %% of the true RMS, heave %.2f %% of "
-                "Hs (no yaw: %.1f %%, %.1f %%, %.2f %%)\n",
-                seed, yawing.wave.x(), yawing.wave.y(), yawing.wave.z(), steady.wave.x(), steady.wave.y(),
-                steady.wave.z());
+    std::printf(
+        "[moored hull yawing 0.12 rad, seed %u] surge %.1f %%, sway %.1f %% of the true RMS, heave %.2f %% of "
+        "Hs (no yaw: %.1f %%, %.1f %%, %.2f %%)\n",
+        seed, yawing.wave.x(), yawing.wave.y(), yawing.wave.z(), steady.wave.x(), steady.wave.y(), steady.wave.z());
     for (int j = 0; j < 3; ++j)
     {
       RecordProperty("yawing_wave_error_" + std::to_string(j) + "_" + std::to_string(seed),

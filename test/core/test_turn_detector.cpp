@@ -18,15 +18,15 @@ constexpr double kRate = 50.0;
 struct ShareRecord
 {
   int turns = 0;
-  double allowed_time = 0.0;       ///< total time the share was allowed [s]
-  double first_allowed = -1.0;     ///< first time it was allowed [s]
-  double first_forbidden = -1.0;   ///< first time it was not [s]
-  double last_forbidden = -1.0;    ///< last time it was not [s]
+  double allowed_time = 0.0;      ///< total time the share was allowed [s]
+  double first_allowed = -1.0;    ///< first time it was allowed [s]
+  double first_forbidden = -1.0;  ///< first time it was not [s]
+  double last_forbidden = -1.0;   ///< last time it was not [s]
 };
 
 /// Feeds `seconds` of the heading `heading(t)` [rad, unwrapped] with its rate by difference.
 ShareRecord feed(TurnDetector* detector, double seconds, const std::function<double(double)>& heading,
-         bool attitude_measured = true, double t0 = 0.0)
+                 bool attitude_measured = true, double t0 = 0.0)
 {
   ShareRecord run;
   const double dt = 1.0 / kRate;
@@ -113,7 +113,8 @@ TEST(TurnDetector, ALoneYawHoldsTheShareOffBriefly)
 TEST(TurnDetector, NoAttitudeNoShare)
 {
   TurnDetector detector;
-  const ShareRecord run = feed(&detector, 600.0, [](double) { return 1.0; }, false);
+  const ShareRecord run = feed(
+      &detector, 600.0, [](double) { return 1.0; }, false);
   EXPECT_EQ(run.allowed_time, 0.0);
 }
 

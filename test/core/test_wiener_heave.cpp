@@ -55,8 +55,8 @@ struct Errors
 {
   double position = 0.0;  ///< RMS error after the settling time / RMS displacement
   double velocity = 0.0;
-  double fixed = 0.0;     ///< the same for HeaveFilter's displacement
-  double largest = 0.0;   ///< largest |displacement output| [m]
+  double fixed = 0.0;    ///< the same for HeaveFilter's displacement
+  double largest = 0.0;  ///< largest |displacement output| [m]
   long valid = 0;
 };
 

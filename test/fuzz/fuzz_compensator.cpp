@@ -6,8 +6,8 @@
 // values, reset, recalibrate, setConstantBias.
 // Asserts: no crash (ASan/UBSan), every output the core fills is finite, the counters add up.
 #include <cmath>
-#include <cstdlib>
 #include <cstdint>
+#include <cstdlib>
 #include <memory>
 #include <sstream>
 #include <stdexcept>
@@ -178,11 +178,20 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       // One sample, each field plausible or arbitrary.
       switch (in.byte() % 8)
       {
-        case 0: t = in.rawDouble(); break;                 // any stamp
-        case 1: t -= in.range(0.0, 100.0); break;          // backwards
-        case 2: t += in.range(0.0, 1e6); break;            // long gap / restart with a jump
-        case 3: break;                                     // repeated stamp
-        default: t += dt; break;
+        case 0:
+          t = in.rawDouble();
+          break;  // any stamp
+        case 1:
+          t -= in.range(0.0, 100.0);
+          break;  // backwards
+        case 2:
+          t += in.range(0.0, 1e6);
+          break;  // long gap / restart with a jump
+        case 3:
+          break;  // repeated stamp
+        default:
+          t += dt;
+          break;
       }
       pbc::ImuSample s = plausible(t, 0.5, 0.3, 0.05);
       if (in.flag())
@@ -196,8 +205,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       if (in.flag())
       {
         s.has_orientation = true;
-        s.orientation = pbc::Quaternion(in.value(1.0, 0.1), in.value(0.0, 0.1), in.value(0.0, 0.1),
-                                        in.value(0.0, 0.1));
+        s.orientation = pbc::Quaternion(in.value(1.0, 0.1), in.value(0.0, 0.1), in.value(0.0, 0.1), in.value(0.0, 0.1));
       }
       feed(s);
     }
@@ -299,8 +307,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const pbc::CompensatorCounters& k = c->counters();
   // Resets and gap restarts are accepted samples too (counted in both); samples held for a jump
   // that was then confirmed are counted as accepted, those dropped as held.
-  const std::uint64_t counted = k.accepted + k.rejected_non_finite + k.rejected_bad_quaternion +
-                                k.rejected_duplicate + k.rejected_out_of_range + k.rejected_early + k.held;
+  const std::uint64_t counted = k.accepted + k.rejected_non_finite + k.rejected_bad_quaternion + k.rejected_duplicate +
+                                k.rejected_out_of_range + k.rejected_early + k.held;
   if (counted != handed)
   {
     pbc_fuzz::fail("counters do not add up: " + std::to_string(counted) + " counted, " + std::to_string(handed) +

@@ -7,8 +7,8 @@
 // an accepted sample is finite; allFinite() is true for what would be published (the wrapper
 // suppresses the rest, counted: the harness checks the suppression is rare input, not a NaN).
 #include <cmath>
-#include <cstdlib>
 #include <cstdint>
+#include <cstdlib>
 #include <string>
 #include <vector>
 
@@ -55,7 +55,8 @@ sensor_msgs::Imu fieldByField(pbc_fuzz::Input& in, double* t)
   msg.orientation.y = in.value(0.0, 0.01);
   msg.orientation.z = in.value(0.0, 0.01);
   const int covariance_kind = in.byte() % 4;
-  for (auto* cov : { &msg.orientation_covariance, &msg.angular_velocity_covariance, &msg.linear_acceleration_covariance })
+  for (auto* cov :
+       { &msg.orientation_covariance, &msg.angular_velocity_covariance, &msg.linear_acceleration_covariance })
   {
     for (int i = 0; i < 9; ++i)
     {
@@ -83,8 +84,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   if (in.flag())
   {
     // As CompensatorRos::updateMounting: normalised, identity if not finite.
-    mounting.imu_to_base = pbc::Quaternion(in.value(1.0, 1.0), in.value(0.0, 1.0), in.value(0.0, 1.0),
-                                           in.value(0.0, 1.0)).normalized();
+    mounting.imu_to_base =
+        pbc::Quaternion(in.value(1.0, 1.0), in.value(0.0, 1.0), in.value(0.0, 1.0), in.value(0.0, 1.0)).normalized();
     if (!mounting.imu_to_base.coeffs().allFinite())
     {
       mounting.imu_to_base = pbc::Quaternion::Identity();
@@ -144,7 +145,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     const pbc::OdometryFrames names;
     const nav_msgs::Odometry filtered =
         pbc::toOdometry(out, pbc::OdometryKind::kFiltered, msg, mounting, names, msg.header.stamp);
-    const nav_msgs::Odometry wave = pbc::toOdometry(out, pbc::OdometryKind::kWave, msg, mounting, names, msg.header.stamp);
+    const nav_msgs::Odometry wave =
+        pbc::toOdometry(out, pbc::OdometryKind::kWave, msg, mounting, names, msg.header.stamp);
     const pbc::BiasState bias = pbc::toBiasState(out, config.mode, "odom", msg.header.stamp);
     if (!pbc::allFinite(bias))
     {

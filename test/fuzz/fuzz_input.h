@@ -16,10 +16,18 @@ namespace pbc_fuzz
 class Input
 {
 public:
-  Input(const std::uint8_t* data, std::size_t size) : data_(data), size_(size) {}
+  Input(const std::uint8_t* data, std::size_t size) : data_(data), size_(size)
+  {
+  }
 
-  bool empty() const { return pos_ >= size_; }
-  std::size_t remaining() const { return pos_ < size_ ? size_ - pos_ : 0; }
+  bool empty() const
+  {
+    return pos_ >= size_;
+  }
+  std::size_t remaining() const
+  {
+    return pos_ < size_ ? size_ - pos_ : 0;
+  }
 
   std::uint8_t byte()
   {
@@ -33,7 +41,10 @@ public:
   {
     return static_cast<std::uint32_t>(u16()) | (static_cast<std::uint32_t>(u16()) << 16);
   }
-  bool flag() { return (byte() & 1) != 0; }
+  bool flag()
+  {
+    return (byte() & 1) != 0;
+  }
 
   /// Any bit pattern: NaN, Inf, subnormal, huge, negative zero.
   double rawDouble()
@@ -49,7 +60,10 @@ public:
   }
 
   /// In [lo, hi], 16 bits of resolution.
-  double range(double lo, double hi) { return lo + (hi - lo) * (u16() / 65535.0); }
+  double range(double lo, double hi)
+  {
+    return lo + (hi - lo) * (u16() / 65535.0);
+  }
 
   /// Mostly plausible values around `typical` (scale `scale`), sometimes an extreme one.
   double value(double typical, double scale)

@@ -28,7 +28,8 @@ std::string writeCsv(const std::string& name, const std::string& separator, doub
     const double t = 5.0 + 0.01 * k;
     const double wobble = 0.05 * std::sin(2.0 * M_PI * 0.5 * t);
     out << t / time_unit << separator << wobble / accel_unit << separator << -wobble / accel_unit << separator
-        << (9.81 + wobble) / accel_unit << separator << 0.01 * wobble << separator << 0.0 << separator << -0.002 << "\n";
+        << (9.81 + wobble) / accel_unit << separator << 0.01 * wobble << separator << 0.0 << separator << -0.002
+        << "\n";
   }
   return path;
 }
@@ -102,20 +103,23 @@ TEST(GapCsv, ColumnMistakesNameTheFilesColumns)
   const std::string unknown =
       messageOf<gap::CsvOptionError>([&] { gap::readCsv(options(path, "t=0,ax=1,ay=2,az=3,gx=4,gy=5,gz=6,wz=6")); });
   EXPECT_NE(unknown.find("unknown key 'wz'"), std::string::npos) << unknown;
-  EXPECT_NE(messageOf<gap::CsvOptionError>([&] { gap::readCsv(options(path, "t=0,ax=1,ay=2,az=3,gx=4,gy=5")); })
-                .find("needs gz"),
+  EXPECT_NE(messageOf<gap::CsvOptionError>([&] {
+              gap::readCsv(options(path, "t=0,ax=1,ay=2,az=3,gx=4,gy=5"));
+            }).find("needs gz"),
             std::string::npos);
 }
 
 TEST(GapCsv, UnitsAreCheckedAgainstGravityAndTheStamps)
 {
-  const std::string in_g = messageOf<std::runtime_error>([] { gap::readCsv(options(writeCsv("g.csv", ",", 9.80665))); });
+  const std::string in_g =
+      messageOf<std::runtime_error>([] { gap::readCsv(options(writeCsv("g.csv", ",", 9.80665))); });
   EXPECT_NE(in_g.find("--accel-scale 9.80665"), std::string::npos) << in_g;
   gap::CsvOptions scaled = options(writeCsv("g.csv", ",", 9.80665));
   scaled.accel_scale = 9.80665;
   EXPECT_NEAR(gap::readCsv(scaled).data(0, 2), 9.81, 1e-9);
 
-  const std::string in_ms = messageOf<std::runtime_error>([] { gap::readCsv(options(writeCsv("ms.csv", ",", 1.0, 1e-3))); });
+  const std::string in_ms =
+      messageOf<std::runtime_error>([] { gap::readCsv(options(writeCsv("ms.csv", ",", 1.0, 1e-3))); });
   EXPECT_NE(in_ms.find("--time-scale"), std::string::npos) << in_ms;
   gap::CsvOptions ms = options(writeCsv("ms.csv", ",", 1.0, 1e-3));
   ms.time_scale = 1e-3;

@@ -19,9 +19,9 @@
 
 #include <gtest/gtest.h>
 
+#include "../common/shell.h"
 #include "periodic_bias_compensation/gap/gap.h"
 #include "periodic_bias_compensation/sim/scenario.h"
-#include "../common/shell.h"
 
 namespace gap = periodic_bias_compensation::gap;
 namespace sim = periodic_bias_compensation::sim;
@@ -220,13 +220,17 @@ TEST(GapTool, DiagnosesASimulatedBagAndACsv)
   const std::string json = readAll(dir + "/bag/report.json");
   EXPECT_NE(json.find("\"verdict\": {\"effect\": \"quantization\""), std::string::npos) << json;
   EXPECT_TRUE(fs::exists(dir + "/bag/report.md"));
-  r = shell(std::string(PBC_DIAGNOSE_GAP) + " --real-csv " + dir + "/real.csv --columns t=t,ax=ax,ay=ay,az=az,gx=gx,gy=gy,gz=gz" +
-            " --sim " + scen + " --out " + dir + "/csv --no-plots");
+  r = shell(std::string(PBC_DIAGNOSE_GAP) + " --real-csv " + dir +
+            "/real.csv --columns t=t,ax=ax,ay=ay,az=az,gx=gx,gy=gy,gz=gz" + " --sim " + scen + " --out " + dir +
+            "/csv --no-plots");
   ASSERT_EQ(r.status, 0) << r.output;
   EXPECT_NE(r.output.find("VERDICT: quantization"), std::string::npos) << r.output;
   // wrong command lines
   EXPECT_EQ(shell(std::string(PBC_DIAGNOSE_GAP) + " --sim " + scen).status, 2);
-  EXPECT_EQ(shell(std::string(PBC_DIAGNOSE_GAP) + " --real " + dir + "/missing.bag --sim " + scen + " --out " + dir + "/x").status, 1);
+  EXPECT_EQ(
+      shell(std::string(PBC_DIAGNOSE_GAP) + " --real " + dir + "/missing.bag --sim " + scen + " --out " + dir + "/x")
+          .status,
+      1);
   std::error_code ec;
   fs::remove_all(dir, ec);
 }
@@ -237,8 +241,8 @@ TEST(GapTool, UnreadableBagsAreNamedAndBadCountsRefused)
   // message, not left to rosbag's own text; exit status 1 and no report folder.
   const std::string dir = tempDir();
   const std::string scen = std::string(PBC_SOURCE_DIR) + "/config/scenarios/paper_static.yaml";
-  CommandResult r = shell(std::string(PBC_SIMULATE_IMU) + " --scenario " + scen + " --duration 20 --out " + dir +
-                          "/whole.bag");
+  CommandResult r =
+      shell(std::string(PBC_SIMULATE_IMU) + " --scenario " + scen + " --duration 20 --out " + dir + "/whole.bag");
   ASSERT_EQ(r.status, 0) << r.output;
   const std::string bytes = readAll(dir + "/whole.bag");
   ASSERT_GT(bytes.size(), 100000u);
@@ -321,7 +325,8 @@ TEST(GapTruth, LocatesABiasStepInTimeAndAxis)
   }
   EXPECT_EQ(segments, (std::set<std::string>{ "seg 7/8", "seg 8/8" })) << gap::reportSummary(rep);
   // the truth departures are in `where` too, and in report.json
-  EXPECT_TRUE(std::any_of(rep.where.begin(), rep.where.end(), [](const gap::Departure& d) { return d.where.stage == "truth"; }));
+  EXPECT_TRUE(std::any_of(rep.where.begin(), rep.where.end(),
+                          [](const gap::Departure& d) { return d.where.stage == "truth"; }));
   EXPECT_NE(gap::reportJson(rep).find("\"truth\": {\"compared\": true"), std::string::npos);
 }
 
@@ -346,26 +351,29 @@ TEST(GapTruth, BagWithATruthTopic)
   EXPECT_NE(json.find("{\"axis\": \"level z\", \"quantity\": \"comp_bias\""), std::string::npos) << r.output;
   // an explicit truth topic that the bag lacks is an error
   EXPECT_EQ(shell(std::string(PBC_DIAGNOSE_GAP) + " --real " + dir + "/real.bag --sim " + scen + " --out " + dir +
-                  "/x --no-plots --truth-topic no/such/topic").status, 1);
+                  "/x --no-plots --truth-topic no/such/topic")
+                .status,
+            1);
   std::error_code ec;
   fs::remove_all(dir, ec);
 }
 
 TEST(GapRealData, RobotArmAgainstItsTruth)
 {
-  const fs::path data = fs::path(PBC_SOURCE_DIR) / ".." / "shared" / "data" / "robot_arm_ground_truth" /
-                        "eV50p_Sequencia2_MPU9150.csv";
+  const fs::path data =
+      fs::path(PBC_SOURCE_DIR) / ".." / "shared" / "data" / "robot_arm_ground_truth" / "eV50p_Sequencia2_MPU9150.csv";
   if (!fs::exists(data))
   {
     GTEST_SKIP() << "real data absent (" << data.string() << "): skipped";
   }
   const std::string dir = tempDir();
-  const CommandResult r = shell(std::string(PBC_DIAGNOSE_GAP) + " --real-csv " + data.string() +
-                                " --columns t=t_s,ax=acc_x_g,ay=acc_y_g,az=acc_z_g,gx=gyro_x_dps,gy=gyro_y_dps,gz=gyro_z_dps,"
-                                "px=abb_pos_x_mm,py=abb_pos_y_mm,pz=abb_pos_z_mm,qw=abb_qw,qx=-abb_qx,qy=-abb_qy,qz=-abb_qz"
-                                " --truth-position-scale 0.001 --accel-scale 9.80665 --gyro-scale 0.017453292519943295 --sim " +
-                                std::string(PBC_SOURCE_DIR) + "/config/scenarios/gap_robot_arm_mpu9150.yaml --out " + dir +
-                                " --no-plots --steps 1 --ensemble 4 --truth-smooth 0.5");
+  const CommandResult r =
+      shell(std::string(PBC_DIAGNOSE_GAP) + " --real-csv " + data.string() +
+            " --columns t=t_s,ax=acc_x_g,ay=acc_y_g,az=acc_z_g,gx=gyro_x_dps,gy=gyro_y_dps,gz=gyro_z_dps,"
+            "px=abb_pos_x_mm,py=abb_pos_y_mm,pz=abb_pos_z_mm,qw=abb_qw,qx=-abb_qx,qy=-abb_qy,qz=-abb_qz"
+            " --truth-position-scale 0.001 --accel-scale 9.80665 --gyro-scale 0.017453292519943295 --sim " +
+            std::string(PBC_SOURCE_DIR) + "/config/scenarios/gap_robot_arm_mpu9150.yaml --out " + dir +
+            " --no-plots --steps 1 --ensemble 4 --truth-smooth 0.5");
   ASSERT_EQ(r.status, 0) << r.output;
   const std::string json = readAll(dir + "/report.json");
   EXPECT_NE(json.find("\"truth\": {\"compared\": true"), std::string::npos) << json;
@@ -388,18 +396,19 @@ TEST(GapRealData, RobotArmAgainstItsTruth)
 
 TEST(GapRealData, AdisStaticAgainstAPlausibleScenario)
 {
-  const fs::path data = fs::path(PBC_SOURCE_DIR) / ".." / "shared" / "data" / "adis16405_static" /
-                        "adis16405_imu1_first10min_100Hz.csv";
+  const fs::path data =
+      fs::path(PBC_SOURCE_DIR) / ".." / "shared" / "data" / "adis16405_static" / "adis16405_imu1_first10min_100Hz.csv";
   if (!fs::exists(data))
   {
     GTEST_SKIP() << "real data absent (" << data.string() << "): skipped";
   }
   const std::string dir = tempDir();
-  const CommandResult r = shell(std::string(PBC_DIAGNOSE_GAP) + " --real-csv " + data.string() +
-                                " --columns t=t_s,ax=acc_x_g,ay=-acc_y_g,az=-acc_z_g,gx=gyro_x_dps,gy=-gyro_y_dps,gz=-gyro_z_dps"
-                                " --accel-scale 9.80665 --gyro-scale 0.017453292519943295 --sim " +
-                                std::string(PBC_SOURCE_DIR) + "/config/scenarios/gap_adis16405_static.yaml --out " + dir +
-                                " --no-plots --steps 1 --ensemble 4 --max-duration 300");
+  const CommandResult r =
+      shell(std::string(PBC_DIAGNOSE_GAP) + " --real-csv " + data.string() +
+            " --columns t=t_s,ax=acc_x_g,ay=-acc_y_g,az=-acc_z_g,gx=gyro_x_dps,gy=-gyro_y_dps,gz=-gyro_z_dps"
+            " --accel-scale 9.80665 --gyro-scale 0.017453292519943295 --sim " +
+            std::string(PBC_SOURCE_DIR) + "/config/scenarios/gap_adis16405_static.yaml --out " + dir +
+            " --no-plots --steps 1 --ensemble 4 --max-duration 300");
   ASSERT_EQ(r.status, 0) << r.output;
   // the ADIS16405 output is on its LSB lattice (0.05 deg/s, 3.33 mg): found directly
   EXPECT_NE(r.output.find("quantization=yes"), std::string::npos) << r.output;

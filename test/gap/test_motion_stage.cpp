@@ -50,7 +50,8 @@ TEST(GapMotion, AnotherSeaAndATrimAreFittedBeforeSensorEffects)
   // short sea on an even keel.
   sim::Scenario recorded = mooredSea(2.0, 9.0);
   recorded.motion.pitch = 0.035;
-  const gap::Report rep = gap::diagnose(gap::simulateRecording(recorded, 12), mooredSea(1.0, 6.0), gap::DiagnoseOptions());
+  const gap::Report rep =
+      gap::diagnose(gap::simulateRecording(recorded, 12), mooredSea(1.0, 6.0), gap::DiagnoseOptions());
   const gap::MotionFit& m = rep.motion;
   ASSERT_TRUE(m.differs) << gap::reportSummary(rep);
   EXPECT_NEAR(m.real.wave_height, 2.0, 0.2);

@@ -18,8 +18,8 @@
 #include <nav_msgs/Odometry.h>
 #include <nav_msgs/Path.h>
 #include <ros/ros.h>
-#include <tf2_msgs/TFMessage.h>
 #include <sensor_msgs/Imu.h>
+#include <tf2_msgs/TFMessage.h>
 
 #include "periodic_bias_compensation/BiasState.h"
 
@@ -63,8 +63,9 @@ public:
       {
         ++tf_count_;
         const auto& r = t.transform.rotation;
-        const std::array<double, 7> v = { t.transform.translation.x, t.transform.translation.y,
-                                          t.transform.translation.z, r.w, r.x, r.y, r.z };
+        const std::array<double, 7> v = {
+          t.transform.translation.x, t.transform.translation.y, t.transform.translation.z, r.w, r.x, r.y, r.z
+        };
         if (!finiteRange(v))
         {
           ++nonfinite_;
@@ -132,9 +133,8 @@ public:
   void bias(const periodic_bias_compensation::BiasState::ConstPtr& msg)
   {
     std::lock_guard<std::mutex> lock(mutex_);
-    if (!finiteRange(msg->constant_bias) || !finiteRange(msg->periodic_bias) ||
-        !finiteRange(msg->dominant_frequency) || !finiteRange(msg->period_samples) || !finiteRange(msg->d_v) ||
-        !finiteRange(msg->d_p))
+    if (!finiteRange(msg->constant_bias) || !finiteRange(msg->periodic_bias) || !finiteRange(msg->dominant_frequency) ||
+        !finiteRange(msg->period_samples) || !finiteRange(msg->d_v) || !finiteRange(msg->d_p))
     {
       ++nonfinite_;
     }
@@ -210,7 +210,9 @@ private:
 class ImuSource
 {
 public:
-  explicit ImuSource(ros::NodeHandle& nh) : pub_(nh.advertise<sensor_msgs::Imu>("imu/data", 5000)) {}
+  explicit ImuSource(ros::NodeHandle& nh) : pub_(nh.advertise<sensor_msgs::Imu>("imu/data", 5000))
+  {
+  }
 
   bool waitForSubscriber(double timeout)
   {

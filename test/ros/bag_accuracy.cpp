@@ -168,10 +168,10 @@ TEST(BagAccuracy, FilteredAndWaveFollowTruth)
   ASSERT_GT(truth_rms, 1e-4) << "the bag has no wave motion to follow";
   const double fraction = wave_rms / truth_rms;
 
-  std::printf("[bag_accuracy] final filtered position error %.4f m after %.1f s (tolerance %.3f m); "
-              "wave RMS error %.4f m = %.1f %% of truth RMS %.4f m over %zu samples (limit %.0f %%)\n",
-              final_error, covered, position_tolerance, wave_rms, 100.0 * fraction, truth_rms, n,
-              100.0 * wave_rms_fraction);
+  std::printf(
+      "[bag_accuracy] final filtered position error %.4f m after %.1f s (tolerance %.3f m); "
+      "wave RMS error %.4f m = %.1f %% of truth RMS %.4f m over %zu samples (limit %.0f %%)\n",
+      final_error, covered, position_tolerance, wave_rms, 100.0 * fraction, truth_rms, n, 100.0 * wave_rms_fraction);
   RecordProperty("final_position_error_m", std::to_string(final_error));
   RecordProperty("wave_rms_error_percent", std::to_string(100.0 * fraction));
   EXPECT_LT(final_error, position_tolerance);

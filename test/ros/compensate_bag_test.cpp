@@ -26,8 +26,8 @@
 #include <tf2/LinearMath/Quaternion.h>
 #include <tf2_msgs/TFMessage.h>
 
-#include "periodic_bias_compensation/BiasState.h"
 #include "../common/shell.h"
+#include "periodic_bias_compensation/BiasState.h"
 
 namespace
 {
@@ -54,7 +54,10 @@ protected:
     ASSERT_NE(mkdtemp(pattern), nullptr);
     dir_ = pattern;
   }
-  void TearDown() override { std::system(("rm -rf " + dir_).c_str()); }
+  void TearDown() override
+  {
+    std::system(("rm -rf " + dir_).c_str());
+  }
   std::string writeFile(const std::string& name, const std::string& content)
   {
     const std::string path = dir_ + "/" + name;
@@ -191,20 +194,21 @@ std::string yawedImuBag(const std::string& path, bool with_tf_static)
     v->y = r.y();
     v->z = r.z();
   };
-  copyImu(PBC_BENCH_BAG, path,
-          [&](sensor_msgs::Imu* m) {
-            m->header.frame_id = "imu_yawed";
-            toImu(&m->linear_acceleration);
-            toImu(&m->angular_velocity);
-            auto& q = m->orientation;
-            const tf2::Quaternion level_from_imu =
-                tf2::Quaternion(q.x, q.y, q.z, q.w) * base_from_imu;  // level <- base <- imu
-            q.x = level_from_imu.x();
-            q.y = level_from_imu.y();
-            q.z = level_from_imu.z();
-            q.w = level_from_imu.w();
-          },
-          tf_static);
+  copyImu(
+      PBC_BENCH_BAG, path,
+      [&](sensor_msgs::Imu* m) {
+        m->header.frame_id = "imu_yawed";
+        toImu(&m->linear_acceleration);
+        toImu(&m->angular_velocity);
+        auto& q = m->orientation;
+        const tf2::Quaternion level_from_imu =
+            tf2::Quaternion(q.x, q.y, q.z, q.w) * base_from_imu;  // level <- base <- imu
+        q.x = level_from_imu.x();
+        q.y = level_from_imu.y();
+        q.z = level_from_imu.z();
+        q.w = level_from_imu.w();
+      },
+      tf_static);
   return path;
 }
 
@@ -325,8 +329,8 @@ TEST_F(CompensateBag, OutputsChoosesTheTopicsWritten)
   r = run(std::string("--in ") + PBC_BENCH_BAG + " --out " + some + " --outputs bias,ground_truth,wave");
   ASSERT_EQ(r.status, 0) << r.output;
   const Contents chosen = readContents(some);
-  for (const char* topic : { "bias_state", "odometry/wave", "ground_truth/slow", "ground_truth/wave",
-                             "ground_truth/odometry" })
+  for (const char* topic :
+       { "bias_state", "odometry/wave", "ground_truth/slow", "ground_truth/wave", "ground_truth/odometry" })
   {
     ASSERT_EQ(chosen.count(topic), 1u) << topic << " missing";
     EXPECT_EQ(chosen.at(topic), everything.at(topic)) << topic << " differs from the default run";
@@ -341,7 +345,8 @@ TEST_F(CompensateBag, CompressionOptionsGiveTheSameMessages)
   for (const std::string compression : { "none", "lz4", "bz2" })
   {
     const std::string out = dir_ + "/" + compression + ".bag";
-    const CommandResult r = run(std::string("--in ") + PBC_BENCH_BAG + " --out " + out + " --compression " + compression);
+    const CommandResult r =
+        run(std::string("--in ") + PBC_BENCH_BAG + " --out " + out + " --compression " + compression);
     ASSERT_EQ(r.status, 0) << r.output;
     const std::map<std::string, int> chunks = chunkCompressions(out);
     ASSERT_EQ(chunks.size(), 1u) << compression << ": chunks of several compressions";
@@ -353,7 +358,8 @@ TEST_F(CompensateBag, CompressionOptionsGiveTheSameMessages)
     // rosbag's Python reader parses every record header itself (the C++ reader trusts the index).
     const CommandResult python = shell(
         "/usr/bin/python3 -c \"import rosbag, sys; b = rosbag.Bag(sys.argv[1]); "
-        "print('read', sum(1 for _ in b.read_messages(raw=True)))\" " + out);
+        "print('read', sum(1 for _ in b.read_messages(raw=True)))\" " +
+        out);
     if (python.output.find("No module named") == std::string::npos)
     {
       std::size_t total = 0;
@@ -379,7 +385,7 @@ TEST_F(CompensateBag, ModeAndParameterFile)
 {
   const std::string out = dir_ + "/paper.bag";
   const CommandResult r = run(std::string("--in ") + PBC_BENCH_BAG + " --out " + out + " --mode paper --params " +
-                    PBC_SOURCE_DIR + "/config/compensator.yaml");
+                              PBC_SOURCE_DIR + "/config/compensator.yaml");
   ASSERT_EQ(r.status, 0) << r.output;
   rosbag::Bag bag(out, rosbag::bagmode::Read);
   std::size_t n = 0;
@@ -704,7 +710,8 @@ TEST_F(CompensateBag, BagEndingMidChunkIsRefusedWithAClearMessage)
   // then processes that part (partial output by the operator's choice, complete for what was kept).
   if (shell("command -v rosbag").status == 0)
   {
-    const CommandResult reindex = shell("mkdir -p " + dir_ + "/re && cd " + dir_ + " && rosbag reindex --output-dir=" + dir_ + "/re cut.bag");
+    const CommandResult reindex =
+        shell("mkdir -p " + dir_ + "/re && cd " + dir_ + " && rosbag reindex --output-dir=" + dir_ + "/re cut.bag");
     const std::string recovered = dir_ + "/re/cut.bag";
     if (reindex.status == 0 && exists(recovered))
     {

@@ -365,8 +365,8 @@ TEST(Parameters, ReconfigureDeclarationsAreTheTable)
         return typeOf(v) == ParameterType::kInt ? std::get<int>(v) : std::get<double>(v);
       };
       // int bounds: dynamic_reconfigure's defaults (INT_MIN, INT_MAX) stand for none.
-      const double none = p.type == ParameterType::kInt ? std::numeric_limits<int>::max() :
-                                                          std::numeric_limits<double>::infinity();
+      const double none =
+          p.type == ParameterType::kInt ? std::numeric_limits<int>::max() : std::numeric_limits<double>::infinity();
       const double lowest = std::isinf(p.range.lowest()) ? -none : p.range.lowest();
       const double highest = std::isinf(p.range.highest()) ? none : p.range.highest();
       EXPECT_EQ(number(minima.at(p.key)), lowest) << p.key << ": min" << hint;

@@ -25,8 +25,13 @@ namespace pbc_test
 class ImuStream
 {
 public:
-  explicit ImuStream(ros::NodeHandle& nh) : pub_(nh.advertise<sensor_msgs::Imu>("imu/data", 1000)) {}
-  ~ImuStream() { stop(); }
+  explicit ImuStream(ros::NodeHandle& nh) : pub_(nh.advertise<sensor_msgs::Imu>("imu/data", 1000))
+  {
+  }
+  ~ImuStream()
+  {
+    stop();
+  }
 
   void start()
   {
@@ -55,11 +60,11 @@ public:
     return pub_.getNumSubscribers() > 0;
   }
 
-  std::atomic<double> amplitude{ 0.0 };      ///< surge acceleration amplitude [m/s^2]
-  std::atomic<double> frequency{ 0.5 };      ///< [Hz]
-  std::atomic<double> rate{ 100.0 };         ///< [Hz]
-  std::atomic<bool> orientation{ true };     ///< orientation present (else covariance[0] = -1)
-  std::atomic<double> stamp_offset{ 0.0 };   ///< added to the wall-time stamp [s] (IMU restart)
+  std::atomic<double> amplitude{ 0.0 };     ///< surge acceleration amplitude [m/s^2]
+  std::atomic<double> frequency{ 0.5 };     ///< [Hz]
+  std::atomic<double> rate{ 100.0 };        ///< [Hz]
+  std::atomic<bool> orientation{ true };    ///< orientation present (else covariance[0] = -1)
+  std::atomic<double> stamp_offset{ 0.0 };  ///< added to the wall-time stamp [s] (IMU restart)
   std::atomic<std::size_t> sent{ 0 };
 
 private:

@@ -116,9 +116,11 @@ TEST(Faults, EachFaultShowsInDiagnosticsAndOutputsContinue)
   EXPECT_EQ(s.values.count("gyro bias estimate x y z [rad/s]"), 1u) << describe(s);
   EXPECT_TRUE(observer.waitForOdometry(50, 5.0)) << "outputs stopped without orientation";
   stream.orientation = true;
-  s = observer.waitForStatus([](const Status& st) { return st.values.count("orientation") &&
-                                                           st.values.at("orientation") == "from the IMU message"; },
-                             10.0);
+  s = observer.waitForStatus(
+      [](const Status& st) {
+        return st.values.count("orientation") && st.values.at("orientation") == "from the IMU message";
+      },
+      10.0);
   EXPECT_EQ(s.message.find("orientation missing"), std::string::npos) << describe(s);
 
   // The sample rate halves.

@@ -33,11 +33,11 @@ public:
 
   void watch(const std::string& ns)
   {
-    subscribers_.push_back(nh_.subscribe<nav_msgs::Odometry>(
-        "/" + ns + "/odometry/filtered", 1000, [this, ns](const nav_msgs::Odometry::ConstPtr&) {
-          std::lock_guard<std::mutex> lock(mutex_);
-          ++odometry_[ns];
-        }));
+    subscribers_.push_back(nh_.subscribe<nav_msgs::Odometry>("/" + ns + "/odometry/filtered", 1000,
+                                                             [this, ns](const nav_msgs::Odometry::ConstPtr&) {
+                                                               std::lock_guard<std::mutex> lock(mutex_);
+                                                               ++odometry_[ns];
+                                                             }));
     subscribers_.push_back(nh_.subscribe<periodic_bias_compensation::BiasState>(
         "/" + ns + "/bias_state", 1000, [this, ns](const periodic_bias_compensation::BiasState::ConstPtr& msg) {
           std::lock_guard<std::mutex> lock(mutex_);

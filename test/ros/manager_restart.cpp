@@ -21,8 +21,8 @@ int nodePid(const std::string& node)
   XmlRpc::XmlRpcValue args, result, payload;
   args[0] = ros::this_node::getName();
   args[1] = node;
-  if (!ros::master::execute("lookupNode", args, result, payload, false) || result.getType() != XmlRpc::XmlRpcValue::TypeArray ||
-      static_cast<int>(result[0]) != 1)
+  if (!ros::master::execute("lookupNode", args, result, payload, false) ||
+      result.getType() != XmlRpc::XmlRpcValue::TypeArray || static_cast<int>(result[0]) != 1)
   {
     return -1;
   }
@@ -54,15 +54,17 @@ TEST(ManagerRestart, OutputsResumeFromAFreshEstimator)
   stream.start();
   ASSERT_TRUE(observer.waitForOdometry(200, 30.0)) << "no odometry/filtered before the restart";
   pbc_test::Status s = observer.waitForStatus(
-      [](const pbc_test::Status& st) { return st.values.count("calibration") && st.values.at("calibration").rfind("done", 0) == 0; },
+      [](const pbc_test::Status& st) {
+        return st.values.count("calibration") && st.values.at("calibration").rfind("done", 0) == 0;
+      },
       20.0);
   ASSERT_GE(s.level, 0) << "never calibrated before the restart";
   // Let the loader's bond with the manager form (heartbeats every second) before the crash.
   ros::WallDuration(5.0).sleep();
   // Messages counted by the compensator so far: a fresh one after the restart counts fewer.
   const pbc_test::Status before_kill = observer.last();
-  const long received_before =
-      before_kill.values.count("received") ? std::stol(before_kill.values.at("received")) : std::stol(s.values["received"]);
+  const long received_before = before_kill.values.count("received") ? std::stol(before_kill.values.at("received"))
+                                                                    : std::stol(s.values["received"]);
   const std::string victim = ros::NodeHandle("~").param<std::string>("kill", "/manager");
   const int pid = nodePid(victim);
   ASSERT_GT(pid, 0) << "no PID for " << victim;

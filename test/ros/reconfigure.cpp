@@ -19,15 +19,15 @@
 #include <vector>
 
 #include <dynamic_reconfigure/client.h>
-#include <rosgraph_msgs/Log.h>
 #include <geometry_msgs/TransformStamped.h>
 #include <gtest/gtest.h>
 #include <nav_msgs/Odometry.h>
 #include <ros/master.h>
 #include <ros/ros.h>
-#include <tf2_ros/static_transform_broadcaster.h>
+#include <rosgraph_msgs/Log.h>
 #include <sensor_msgs/Imu.h>
 #include <std_srvs/Trigger.h>
+#include <tf2_ros/static_transform_broadcaster.h>
 
 #include "periodic_bias_compensation/BiasState.h"
 #include "periodic_bias_compensation/CompensatorConfig.h"
@@ -75,8 +75,7 @@ private:
 class BiasWatcher
 {
 public:
-  explicit BiasWatcher(ros::NodeHandle& nh)
-    : sub_(nh.subscribe("bias_state", 10, &BiasWatcher::callback, this))
+  explicit BiasWatcher(ros::NodeHandle& nh) : sub_(nh.subscribe("bias_state", 10, &BiasWatcher::callback, this))
   {
   }
   void callback(const periodic_bias_compensation::BiasState::ConstPtr& msg)
@@ -202,7 +201,9 @@ private:
 class Reconfigure : public testing::Test
 {
 protected:
-  Reconfigure() : feeder_(nh_), watcher_(nh_), logs_(nh_), client_("compensator") {}
+  Reconfigure() : feeder_(nh_), watcher_(nh_), logs_(nh_), client_("compensator")
+  {
+  }
 
   ros::NodeHandle nh_;
   ImuFeeder feeder_;
@@ -272,8 +273,7 @@ TEST_F(Reconfigure, ChangesAreLoggedClampedOrRefused)
   bad.max_frequency = 0.01;
   ASSERT_TRUE(client_.setConfiguration(bad));
   EXPECT_DOUBLE_EQ(bad.max_frequency, config.max_frequency);
-  EXPECT_TRUE(logs_.waitFor(Log::WARN, "max_frequency = 0.01 must be above min_frequency = 0.05", 5.0))
-      << logs_.dump();
+  EXPECT_TRUE(logs_.waitFor(Log::WARN, "max_frequency = 0.01 must be above min_frequency = 0.05", 5.0)) << logs_.dump();
 
   ASSERT_TRUE(client_.getCurrentConfiguration(current, ros::Duration(5.0)));
   EXPECT_DOUBLE_EQ(current.alpha_v_x, 0.3);
@@ -315,8 +315,8 @@ TEST_F(Reconfigure, MountingFromTf)
   std::mutex mutex;
   nav_msgs::Odometry last;
   bool received = false;
-  ros::Subscriber sub = nh_.subscribe<nav_msgs::Odometry>(
-      "odometry/filtered", 10, [&](const nav_msgs::Odometry::ConstPtr& msg) {
+  ros::Subscriber sub =
+      nh_.subscribe<nav_msgs::Odometry>("odometry/filtered", 10, [&](const nav_msgs::Odometry::ConstPtr& msg) {
         std::lock_guard<std::mutex> lock(mutex);
         last = *msg;
         received = true;

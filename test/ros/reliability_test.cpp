@@ -176,8 +176,8 @@ TEST(Reliability, InvalidGainsWhileDataFlowsAreRefusedAndLeaveTheEstimateUnharme
       }
       CompensatorOutput out;
       disturbed.addSample(r.samples[k], &out);
-      ASSERT_TRUE(bitEqual(out, expected[k])) << "refused reconfigure changed the estimate at sample " << k
-                                              << " (mode " << pbc::toString(mode) << ")";
+      ASSERT_TRUE(bitEqual(out, expected[k]))
+          << "refused reconfigure changed the estimate at sample " << k << " (mode " << pbc::toString(mode) << ")";
     }
     EXPECT_GT(refused, invalid.size());
   }
@@ -233,9 +233,10 @@ TEST(Reliability, ExtremeValidGainsWhileDataFlowsStayBounded)
       if (k < half)
         max_first_half = max_position;
     }
-    std::printf("[extreme gains] %s mode: max |position| %.3f m after calibration (%.3f m in its first half), %zu "
-                "samples\n",
-                pbc::toString(mode).c_str(), max_position, max_first_half, r.samples.size());
+    std::printf(
+        "[extreme gains] %s mode: max |position| %.3f m after calibration (%.3f m in its first half), %zu "
+        "samples\n",
+        pbc::toString(mode).c_str(), max_position, max_first_half, r.samples.size());
     // The bench moves by centimetres; raw double integration drifts by tens of metres.
     EXPECT_LT(max_position, 2.0) << pbc::toString(mode);
     EXPECT_EQ(max_position, max_first_half) << pbc::toString(mode) << ": larger in the second half";
@@ -282,11 +283,12 @@ TEST(Reliability, OrientationDisappearingMidRunKeepsOutputs)
     }
     const double level_error =
         without.levelOrientation().angularDistance(pbc::Quaternion(mean.normalized())) * 180.0 / M_PI;
-    std::printf("[orientation lost, gyro_attitude %s] after %.0f s: max |wave difference| %.3f m, horizontal %.3f m "
-                "(wave amplitude up to %.2f m), max |filtered difference| %.3f m; level %.2f deg from the mean "
-                "attitude (%s)\n",
-                gyro_attitude ? "true" : "false", r.samples[cut].t - r.samples[0].t, max_difference, max_horizontal,
-                max_wave_truth, max_filtered_difference, level_error, pbc::toString(without.levelSource()).c_str());
+    std::printf(
+        "[orientation lost, gyro_attitude %s] after %.0f s: max |wave difference| %.3f m, horizontal %.3f m "
+        "(wave amplitude up to %.2f m), max |filtered difference| %.3f m; level %.2f deg from the mean "
+        "attitude (%s)\n",
+        gyro_attitude ? "true" : "false", r.samples[cut].t - r.samples[0].t, max_difference, max_horizontal,
+        max_wave_truth, max_filtered_difference, level_error, pbc::toString(without.levelSource()).c_str());
     // Levelled with one frame, the roll and pitch of the hull leak into the level axes: a
     // bounded difference, not a jump.
     EXPECT_LT(max_difference, max_wave_truth);
@@ -452,7 +454,9 @@ TEST(Reliability, LongRunMemoryAndCostFlatOutputsBounded)
       row.rss_mb = residentBytes() / 1048576.0;
     }
   }
-  std::printf("| hour | samples | RSS [MB] | core ns/sample | max |filtered| [m] | max |wave| [m] | wave RMS error / truth RMS | heave locked |\n");
+  std::printf(
+      "| hour | samples | RSS [MB] | core ns/sample | max |filtered| [m] | max |wave| [m] | wave RMS error / truth RMS "
+      "| heave locked |\n");
   std::printf("|---|---|---|---|---|---|---|---|\n");
   for (int h = 0; h < hours; ++h)
   {

@@ -78,7 +78,8 @@ TEST(Effects, WhiteNoisePsdLevelAndAllanDeviation)
 TEST(Effects, ConstantBiasIsExactOffset)
 {
   sim::Scenario s = shaken(100.0, 10.0);
-  s.effects.push_back(effect("constant_bias", { { "accel", { 0.02, -0.01, 0.03 } }, { "gyro", { 1e-3, 2e-3, -3e-3 } } }));
+  s.effects.push_back(
+      effect("constant_bias", { { "accel", { 0.02, -0.01, 0.03 } }, { "gyro", { 1e-3, 2e-3, -3e-3 } } }));
   const sim_test::Errors e = run(s);
   for (std::size_t k = 0; k < e.accel.size(); ++k)
   {
@@ -92,7 +93,8 @@ TEST(Effects, BiasRandomWalkAllanSlopeIsPlusHalf)
   const double k_density = 1e-4;
   const double fs = 10.0;
   sim::Scenario s = staticScenario(fs, 40000.0);
-  s.effects.push_back(effect("bias_random_walk", { { "accel_density", { k_density } }, { "gyro_density", { k_density } } }));
+  s.effects.push_back(
+      effect("bias_random_walk", { { "accel_density", { k_density } }, { "gyro_density", { k_density } } }));
   const sim_test::Errors e = run(s);
   double avar10 = 0.0;
   double avar100 = 0.0;
@@ -116,8 +118,9 @@ TEST(Effects, BiasInstabilityAutocorrelationAtCorrelationTime)
   const double tau = 5.0;
   const double fs = 10.0;
   sim::Scenario s = staticScenario(fs, 10000.0);
-  s.effects.push_back(effect("bias_instability", { { "accel_sigma", { sigma } }, { "gyro_sigma", { sigma } },
-                                                   { "correlation_time", { tau } } }));
+  s.effects.push_back(
+      effect("bias_instability",
+             { { "accel_sigma", { sigma } }, { "gyro_sigma", { sigma } }, { "correlation_time", { tau } } }));
   const sim_test::Errors e = run(s);
   double c0 = 0.0;
   double ctau = 0.0;
@@ -187,7 +190,8 @@ TEST(Effects, ThermalDriftFollowsTemperatureProfile)
 TEST(Effects, ScaleFactorMultipliesTheSignal)
 {
   sim::Scenario s = shaken(100.0, 10.0);
-  s.effects.push_back(effect("scale_factor", { { "accel", { 0.01, -0.02, 0.005 } }, { "gyro", { 0.03, 0.0, -0.01 } } }));
+  s.effects.push_back(
+      effect("scale_factor", { { "accel", { 0.01, -0.02, 0.005 } }, { "gyro", { 0.03, 0.0, -0.01 } } }));
   const sim_test::Errors e = run(s, 1, true);
   for (std::size_t k = 0; k < e.samples.size(); ++k)
   {
@@ -278,9 +282,9 @@ TEST(Effects, VibrationBandwidthGivesLorentzianCoherenceDecay)
   const double f = 7.0;  // whole periods in 1 s and 2 s
   const double bandwidth = 0.2;
   sim::Scenario s = staticScenario(fs, 4000.0);
-  s.effects.push_back(effect("vibration", { { "frequency", { f } },
-                                            { "accel_amplitude", { 0.3, 0.0, 0.0 } },
-                                            { "bandwidth", { bandwidth } } }));
+  s.effects.push_back(
+      effect("vibration",
+             { { "frequency", { f } }, { "accel_amplitude", { 0.3, 0.0, 0.0 } }, { "bandwidth", { bandwidth } } }));
   const sim_test::Errors e = run(s);
   const std::vector<double> ax = axis(e.accel, 0);
   const double c0 = sim_test::autocovariance(ax, 0);

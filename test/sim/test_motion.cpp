@@ -101,8 +101,8 @@ TEST(Motion, StaticLevelReadsPlusGravityOnZ)
   {
     ASSERT_NEAR((smp.accel - sim::Vector3(0.0, 0.0, sim::kStandardGravity)).norm(), 0.0, 1e-12);
     ASSERT_EQ(smp.gyro.norm(), 0.0);
-    ASSERT_NEAR(smp.orientation.angularDistance(sim::Quaternion(Eigen::AngleAxisd(1.2, sim::Vector3::UnitZ()))),
-                0.0, 1e-12);
+    ASSERT_NEAR(smp.orientation.angularDistance(sim::Quaternion(Eigen::AngleAxisd(1.2, sim::Vector3::UnitZ()))), 0.0,
+                1e-12);
     ASSERT_EQ(smp.truth.velocity.norm(), 0.0);
   }
   EXPECT_DOUBLE_EQ(smp.t, 1000.0 + 99.0 / 100.0);
@@ -146,8 +146,12 @@ TEST(Motion, SinusoidTruthIsConsistent)
   s.motion.type = sim::MotionType::kSinusoids;
   s.motion.speed = 3.0;
   s.motion.heading = 0.7;
-  s.motion.sinusoids = { { { 0.5, 0.2, 0.0 }, { 0.3, 0.15, 1.0 }, { 1.0, 0.1, 2.0 },
-                           { 0.3, 0.12, 0.0 }, { 0.1, 0.2, 0.3 }, { 0.2, 0.05, 1.0 } } };
+  s.motion.sinusoids = { { { 0.5, 0.2, 0.0 },
+                           { 0.3, 0.15, 1.0 },
+                           { 1.0, 0.1, 2.0 },
+                           { 0.3, 0.12, 0.0 },
+                           { 0.1, 0.2, 0.3 },
+                           { 0.2, 0.05, 1.0 } } };
   expectConsistent(truths(s), s.rate, 1e-4);
 }
 

@@ -115,10 +115,10 @@ TEST(Scenario, EffectsCanBeFoundAndSwitched)
 
 TEST(Scenario, VocabularyHasEveryEffectWithUnits)
 {
-  const std::vector<std::string> names = { "white_noise",   "constant_bias", "bias_random_walk", "bias_instability",
-                                           "periodic_bias", "thermal_drift", "scale_factor",     "misalignment",
-                                           "gravity_leakage", "lever_arm",   "vibration",        "quantization",
-                                           "saturation",    "sample_hold",   "timestamp_jitter", "dropouts" };
+  const std::vector<std::string> names = { "white_noise",     "constant_bias", "bias_random_walk", "bias_instability",
+                                           "periodic_bias",   "thermal_drift", "scale_factor",     "misalignment",
+                                           "gravity_leakage", "lever_arm",     "vibration",        "quantization",
+                                           "saturation",      "sample_hold",   "timestamp_jitter", "dropouts" };
   EXPECT_EQ(sim::effectVocabulary().size(), names.size());
   for (const std::string& n : names)
   {

@@ -21,8 +21,8 @@ void onOdometry(const nav_msgs::Odometry::ConstPtr& msg)
   ++g_count;
   const auto& p = msg->pose.pose.position;
   const auto& v = msg->twist.twist.linear;
-  if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z) || !std::isfinite(v.x) ||
-      !std::isfinite(v.y) || !std::isfinite(v.z))
+  if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z) || !std::isfinite(v.x) || !std::isfinite(v.y) ||
+      !std::isfinite(v.z))
   {
     ++g_nonfinite;
   }

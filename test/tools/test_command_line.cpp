@@ -60,8 +60,8 @@ std::string error(const std::vector<std::string>& args)
 TEST(CommandLine, ReadsValuesAndFlags)
 {
   Options o;
-  ASSERT_TRUE(parse({ "--scenario", "a.yaml", "--settle", "2.5e1", "--seeds", "7", "--seed",
-                      "18446744073709551615", "--quiet", "--no-plots" },
+  ASSERT_TRUE(parse({ "--scenario", "a.yaml", "--settle", "2.5e1", "--seeds", "7", "--seed", "18446744073709551615",
+                      "--quiet", "--no-plots" },
                     &o));
   EXPECT_EQ(o.scenario, "a.yaml");
   EXPECT_DOUBLE_EQ(o.settle, 25.0);

@@ -20,17 +20,17 @@
 
 #include <gtest/gtest.h>
 
+#include "../common/shell.h"
 #include "periodic_bias_compensation/tools/command_line.h"
 #include "periodic_bias_compensation/tools/output_file.h"
-#include "../common/shell.h"
 
 namespace fs = std::filesystem;
+using pbc_test::CommandResult;
+using pbc_test::shell;
 using periodic_bias_compensation::NamedPath;
 using periodic_bias_compensation::OutputFile;
 using periodic_bias_compensation::refuseOverwritingInputs;
 using periodic_bias_compensation::UsageError;
-using pbc_test::CommandResult;
-using pbc_test::shell;
 
 namespace
 {
@@ -207,20 +207,25 @@ TEST_F(OutputFiles, AnOutputThatIsAnInputIsACommandLineError)
   ASSERT_EQ(::symlink(in.c_str(), (dir_ + "/symlink.yaml").c_str()), 0);
   ASSERT_EQ(::link(in.c_str(), (dir_ + "/hardlink.yaml").c_str()), 0);
   const std::string base = fs::path(dir_).filename().string();
-  for (const std::string& same : { in, dir_ + "/./in.yaml", dir_ + "/../" + base + "/in.yaml", dir_ + "/symlink.yaml",
-                                   dir_ + "/hardlink.yaml" })
+  for (const std::string& same :
+       { in, dir_ + "/./in.yaml", dir_ + "/../" + base + "/in.yaml", dir_ + "/symlink.yaml", dir_ + "/hardlink.yaml" })
   {
     const std::string message = thrown<UsageError>([&] {
       refuseOverwritingInputs({ { "--scenario", in } }, { { "--out", same } });
     });
     EXPECT_TRUE(contains(message, "--out '" + same + "' is the same file as --scenario '" + in + "'")) << message;
   }
-  EXPECT_EQ(thrown<UsageError>([&] { refuseOverwritingInputs({ { "--scenario", in } }, { { "--out", dir_ + "/o" } }); }),
+  EXPECT_EQ(thrown<UsageError>([&] {
+              refuseOverwritingInputs({ { "--scenario", in } }, { { "--out", dir_ + "/o" } });
+            }),
             "");
-  EXPECT_EQ(thrown<UsageError>([&] { refuseOverwritingInputs({ { "--params", "" } }, { { "--out", dir_ + "/o" } }); }),
+  EXPECT_EQ(thrown<UsageError>([&] {
+              refuseOverwritingInputs({ { "--params", "" } }, { { "--out", dir_ + "/o" } });
+            }),
             "");
-  const std::string both = thrown<UsageError>(
-      [&] { refuseOverwritingInputs({}, { { "--md", dir_ + "/r" }, { "--json", dir_ + "/./r" } }); });
+  const std::string both = thrown<UsageError>([&] {
+    refuseOverwritingInputs({}, { { "--md", dir_ + "/r" }, { "--json", dir_ + "/./r" } });
+  });
   EXPECT_TRUE(contains(both, "--json") && contains(both, "--md")) << both;
   EXPECT_EQ(readAll(in), "x: 1\n");
 }
@@ -272,11 +277,12 @@ TEST_F(OutputFiles, ToolsRefuseToWriteOverAnInput)
     const std::string before = readAll(c.input);
     const CommandResult r = shell(c.command);
     EXPECT_EQ(r.status, 2) << c.command << "\n" << r.output;
-    EXPECT_TRUE(contains(r.output, c.option + " '") && contains(r.output, "is the same file as"))
-        << c.command << "\n" << r.output;
+    EXPECT_TRUE(contains(r.output, c.option + " '") && contains(r.output, "is the same file as")) << c.command << "\n"
+                                                                                                  << r.output;
     EXPECT_EQ(readAll(c.input), before) << c.input << " changed by " << c.command;
   }
-  const CommandResult r = shell(std::string(PBC_VALIDATE_GAP) + " --small --md " + dir_ + "/r.md --json " + dir_ + "/r.md");
+  const CommandResult r =
+      shell(std::string(PBC_VALIDATE_GAP) + " --small --md " + dir_ + "/r.md --json " + dir_ + "/r.md");
   EXPECT_EQ(r.status, 2) << r.output;
   EXPECT_TRUE(contains(r.output, "--json '")) << r.output;
   EXPECT_FALSE(exists(dir_ + "/o.bag"));

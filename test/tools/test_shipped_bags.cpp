@@ -33,9 +33,9 @@ bool finite(const nav_msgs::Odometry& o)
 {
   const auto& p = o.pose.pose;
   const auto& t = o.twist.twist;
-  const double values[] = { p.position.x, p.position.y, p.position.z, p.orientation.w, p.orientation.x,
-                            p.orientation.y, p.orientation.z, t.linear.x, t.linear.y, t.linear.z,
-                            t.angular.x, t.angular.y, t.angular.z };
+  const double values[] = { p.position.x,    p.position.y,    p.position.z, p.orientation.w, p.orientation.x,
+                            p.orientation.y, p.orientation.z, t.linear.x,   t.linear.y,      t.linear.z,
+                            t.angular.x,     t.angular.y,     t.angular.z };
   for (double v : values)
   {
     if (!std::isfinite(v))
@@ -96,8 +96,8 @@ TEST_P(ShippedBags, CompensatorConsumesSimulatedBag)
   const std::string scenario = GetParam();
   const std::string sim_bag = dir_ + "/sim.bag";
   const std::string out_bag = dir_ + "/out.bag";
-  const CommandResult sim = shell(std::string(PBC_SIMULATE_IMU) + " --scenario " + scenario + " --out " + sim_bag +
-                                  " --duration 60");
+  const CommandResult sim =
+      shell(std::string(PBC_SIMULATE_IMU) + " --scenario " + scenario + " --out " + sim_bag + " --duration 60");
   ASSERT_EQ(sim.status, 0) << sim.output;
   const CommandResult comp = shell(std::string(PBC_COMPENSATE_BAG) + " --in " + sim_bag + " --out " + out_bag);
   ASSERT_EQ(comp.status, 0) << comp.output;

@@ -38,15 +38,15 @@ namespace periodic_bias_compensation
 /// One sample of one axis, as the owner has it.
 struct BroadbandWaveInput
 {
-  double raw = 0.0;          ///< level acceleration, gravity removed [m/s^2]
-  double offset_free = 0.0;  ///< raw less the calibrated constant offset (fixed once calibrated)
-  double residual = 0.0;     ///< what the harmonic model leaves of the acceleration [m/s^2]
+  double raw = 0.0;                ///< level acceleration, gravity removed [m/s^2]
+  double offset_free = 0.0;        ///< raw less the calibrated constant offset (fixed once calibrated)
+  double residual = 0.0;           ///< what the harmonic model leaves of the acceleration [m/s^2]
   double harmonic_position = 0.0;  ///< the harmonic model's wave displacement [m]
-  bool locked = false;       ///< the harmonic model has a lock
-  bool allowed = true;       ///< a horizontal axis may take a broadband share now
-  bool turning = false;      ///< the heading has moved: the sea as met changed, its spectrum is measured anew
-  double dt = 0.0;           ///< [s] since the previous sample (0: the first)
-  double rate = 0.0;         ///< sample rate [Hz] (0: not known yet)
+  bool locked = false;             ///< the harmonic model has a lock
+  bool allowed = true;             ///< a horizontal axis may take a broadband share now
+  bool turning = false;            ///< the heading has moved: the sea as met changed, its spectrum is measured anew
+  double dt = 0.0;                 ///< [s] since the previous sample (0: the first)
+  double rate = 0.0;               ///< sample rate [Hz] (0: not known yet)
 };
 
 struct BroadbandWaveOutput
@@ -101,15 +101,15 @@ private:
   std::array<HighPass, 2> residual_high_{};  ///< the harmonic model's residual above the band edge
   HeaveFilter residual_heave_;               ///< the residual's displacement
   double residual_band_variance_ = 0.0;
-  double difference_variance_ = 0.0;        ///< of harmonic less broadband displacement, since the lock
-  double residual_samples_ = 0.0;            ///< in residual_band_variance_ since the lock
-  double samples_ = 0.0;                     ///< in noise_variance_ and low_variance_
+  double difference_variance_ = 0.0;  ///< of harmonic less broadband displacement, since the lock
+  double residual_samples_ = 0.0;     ///< in residual_band_variance_ since the lock
+  double samples_ = 0.0;              ///< in noise_variance_ and low_variance_
   double weight_ = 0.0;
-  double spectral_share_ = 0.0;              ///< of the spectral estimate against the fixed filter
-  std::array<double, 2> low_{};              ///< the broadband output below the wave band
+  double spectral_share_ = 0.0;  ///< of the spectral estimate against the fixed filter
+  std::array<double, 2> low_{};  ///< the broadband output below the wave band
   double low_variance_ = 0.0;
   double previous_raw_ = NAN;
-  double noise_variance_ = 0.0;              ///< white noise per sample [(m/s^2)^2]
+  double noise_variance_ = 0.0;  ///< white noise per sample [(m/s^2)^2]
 };
 
 }  // namespace periodic_bias_compensation

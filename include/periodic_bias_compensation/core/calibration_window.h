@@ -27,11 +27,11 @@ namespace periodic_bias_compensation
 /// How windowOffset() looks for the window's dominant frequency.
 struct WindowOffsetOptions
 {
-  bool at_rest = false;  ///< the window is known to be at rest: its mean
-  double rate = 0.0;     ///< sample rate [Hz]
+  bool at_rest = false;                             ///< the window is known to be at rest: its mean
+  double rate = 0.0;                                ///< sample rate [Hz]
   double min_frequency = 0.0, max_frequency = 0.0;  ///< band searched [Hz]
-  double min_peak_ratio = 0.0;  ///< peak / median power a lock needs [-]
-  int harmonics = 1;            ///< harmonics of the fit [-]
+  double min_peak_ratio = 0.0;                      ///< peak / median power a lock needs [-]
+  int harmonics = 1;                                ///< harmonics of the fit [-]
 };
 
 /// Offset of one axis over a window; *frequency: the dominant frequency found (not locked when

@@ -72,18 +72,18 @@ struct CompensatorConfig
   /// Table 3 of the paper: x, y, z.
   std::array<AxisGains, 3> gains{ { { 0.5, 0.5, 6.0, 2.0 }, { 0.5, 0.1, 5.0, 1.0 }, { 0.5, 0.1, 5.0, 4.0 } } };
 
-  bool enable_constant = true;   ///< estimate/remove the constant bias
-  bool enable_periodic = true;   ///< estimate/remove the periodic bias
-  double calibration_duration = 10.0;  ///< constant-bias window at start [s]
+  bool enable_constant = true;             ///< estimate/remove the constant bias
+  bool enable_periodic = true;             ///< estimate/remove the periodic bias
+  double calibration_duration = 10.0;      ///< constant-bias window at start [s]
   bool assume_static_calibration = false;  ///< window is at rest (paper Sec. 3.1); else motion allowed
 
-  double fft_window = 60.0;      ///< FFT window length [s]
-  double fft_hop = 1.0;          ///< time between FFT updates [s]
-  double min_frequency = 0.05;   ///< lowest dominant frequency searched [Hz]
-  double max_frequency = 2.0;    ///< highest dominant frequency searched [Hz]
-  double min_peak_ratio = 30.0;  ///< peak power / median power in band needed for a lock [-]
-  int harmonics = 2;             ///< harmonics of the dominant frequency tracked (default mode)
-  double harmonic_memory = 3.0; ///< time constant of the harmonic estimator [s] (default mode)
+  double fft_window = 60.0;          ///< FFT window length [s]
+  double fft_hop = 1.0;              ///< time between FFT updates [s]
+  double min_frequency = 0.05;       ///< lowest dominant frequency searched [Hz]
+  double max_frequency = 2.0;        ///< highest dominant frequency searched [Hz]
+  double min_peak_ratio = 30.0;      ///< peak power / median power in band needed for a lock [-]
+  int harmonics = 2;                 ///< harmonics of the dominant frequency tracked (default mode)
+  double harmonic_memory = 3.0;      ///< time constant of the harmonic estimator [s] (default mode)
   double drift_time_constant = 2.0;  ///< slow-motion drift removal time constant [s] (default)
   /// Default mode: the vertical wave motion (heave) from the whole wave band (HeaveFilter)
   /// rather than from the harmonic model of the dominant period.
@@ -103,9 +103,9 @@ struct CompensatorConfig
   /// mode [m].
   Vector3 lever_arm{ 0, 0, 0 };
 
-  double gravity = kStandardGravity;  ///< local gravity magnitude [m/s^2]
-  double max_gap = 0.5;          ///< a confirmed gap longer than this resets the integration [s]
-  double max_rate_change = 0.2;  ///< relative sample-rate change that re-plans the FFT [-]
+  double gravity = kStandardGravity;        ///< local gravity magnitude [m/s^2]
+  double max_gap = 0.5;                     ///< a confirmed gap longer than this resets the integration [s]
+  double max_rate_change = 0.2;             ///< relative sample-rate change that re-plans the FFT [-]
   double max_quaternion_norm_error = 0.01;  ///< |1 - |q|| above this rejects the sample [-]
 
   /// Checks every key's range (compensatorParameters(), which holds the loop stability limits)
@@ -118,7 +118,7 @@ struct CompensatorConfig
 /// One IMU sample. REP-145: specific force including gravity, in the sensor frame.
 struct ImuSample
 {
-  double t = 0.0;               ///< sample time [s]
+  double t = 0.0;                     ///< sample time [s]
   Vector3 specific_force{ 0, 0, 0 };  ///< accelerometer [m/s^2]
   Vector3 angular_rate{ 0, 0, 0 };    ///< gyro [rad/s]
   bool has_orientation = false;
@@ -128,13 +128,13 @@ struct ImuSample
 /// Per-axis estimator state, as published in BiasState.
 struct AxisState
 {
-  double constant_bias = 0.0;     ///< [m/s^2]
-  double periodic_bias = 0.0;     ///< current periodic acceleration estimate [m/s^2]
-  double frequency = 0.0;         ///< dominant frequency [Hz], 0 if not locked
-  double period_samples = 0.0;    ///< L [samples], 0 if not locked
+  double constant_bias = 0.0;   ///< [m/s^2]
+  double periodic_bias = 0.0;   ///< current periodic acceleration estimate [m/s^2]
+  double frequency = 0.0;       ///< dominant frequency [Hz], 0 if not locked
+  double period_samples = 0.0;  ///< L [samples], 0 if not locked
   bool locked = false;
-  double d_v = 0.0;               ///< [m/s]
-  double d_p = 0.0;               ///< [m]
+  double d_v = 0.0;  ///< [m/s]
+  double d_p = 0.0;  ///< [m]
   /// Paper mode: locked, but the period is shorter than kMinPaperPeriod samples, so the
   /// periodic correction is off on this axis (it could diverge).
   bool period_too_short = false;
@@ -193,17 +193,17 @@ struct CompensatorOutput
 {
   double t = 0.0;
   OutputState state = OutputState::kCalibrating;
-  Vector3 position_filtered{ 0, 0, 0 };  ///< slow motion, drift and wave removed [m]
-  Vector3 velocity_filtered{ 0, 0, 0 };  ///< [m/s]
-  Vector3 position_wave{ 0, 0, 0 };      ///< wave (periodic) motion about the slow motion [m]
-  Vector3 velocity_wave{ 0, 0, 0 };      ///< [m/s]
-  Vector3 acceleration_level{ 0, 0, 0 }; ///< gravity-free level acceleration, bias removed [m/s^2]
+  Vector3 position_filtered{ 0, 0, 0 };   ///< slow motion, drift and wave removed [m]
+  Vector3 velocity_filtered{ 0, 0, 0 };   ///< [m/s]
+  Vector3 position_wave{ 0, 0, 0 };       ///< wave (periodic) motion about the slow motion [m]
+  Vector3 velocity_wave{ 0, 0, 0 };       ///< [m/s]
+  Vector3 acceleration_level{ 0, 0, 0 };  ///< gravity-free level acceleration, bias removed [m/s^2]
   /// Gravity-free level acceleration with only the calibrated constant bias removed (no
   /// adaptive correction): what plain constant compensation integrates [m/s^2].
   Vector3 acceleration_constant_compensated{ 0, 0, 0 };
-  Quaternion orientation{ 1, 0, 0, 0 };  ///< sensor -> level frame used for this sample
-  Vector3 position_variance{ 0, 0, 0 };  ///< per-axis variance of position_filtered [m^2]
-  Vector3 velocity_variance{ 0, 0, 0 };  ///< [m^2/s^2]
+  Quaternion orientation{ 1, 0, 0, 0 };       ///< sensor -> level frame used for this sample
+  Vector3 position_variance{ 0, 0, 0 };       ///< per-axis variance of position_filtered [m^2]
+  Vector3 velocity_variance{ 0, 0, 0 };       ///< [m^2/s^2]
   Vector3 wave_position_variance{ 0, 0, 0 };  ///< [m^2]
   Vector3 wave_velocity_variance{ 0, 0, 0 };  ///< [m^2/s^2]
   std::array<AxisState, 3> axes;
@@ -234,8 +234,8 @@ struct CompensatorCounters
   std::uint64_t rejected_duplicate = 0;
   std::uint64_t rejected_out_of_range = 0;
   std::uint64_t rejected_early = 0;
-  std::uint64_t held = 0;            ///< samples held while a jump in the stamps was confirmed
-  std::uint64_t timing_glitches = 0; ///< lone stamps dropped: early, or held and then discarded
+  std::uint64_t held = 0;             ///< samples held while a jump in the stamps was confirmed
+  std::uint64_t timing_glitches = 0;  ///< lone stamps dropped: early, or held and then discarded
   std::uint64_t resets_backwards = 0;
   std::uint64_t gap_resets = 0;
   std::uint64_t rate_changes = 0;

@@ -44,9 +44,18 @@ public:
   bool full() const;
   /// Input samples the window spans so far (at most windowSamples()).
   int samples() const;
-  int windowSamples() const { return n_ * decimation_; }
-  double sampleRate() const { return rate_ * decimation_; }
-  int decimation() const { return decimation_; }
+  int windowSamples() const
+  {
+    return n_ * decimation_;
+  }
+  double sampleRate() const
+  {
+    return rate_ * decimation_;
+  }
+  int decimation() const
+  {
+    return decimation_;
+  }
 
   /// Dominant frequency in [f_min, f_max] [Hz] (DC excluded, Hann window, mean removed,
   /// Gaussian interpolation of the peak between bins). Not locked when the window is not
@@ -65,19 +74,19 @@ private:
   void store(double value, double t);     ///< into the window (decimated rate)
   void decimate(double value, double t);  ///< through the anti-alias filter
 
-  int n_;          ///< window [samples at the decimated rate]
-  int fft_size_;   ///< transform size, >= n_ (zero-padded)
-  double rate_;    ///< decimated rate [Hz]
+  int n_;         ///< window [samples at the decimated rate]
+  int fft_size_;  ///< transform size, >= n_ (zero-padded)
+  double rate_;   ///< decimated rate [Hz]
   int decimation_ = 1;
   // Anti-alias filter (decimation_ > 1): moving sum of the last M inputs, summed over a block.
   std::vector<double> moving_;  ///< last M inputs
   int moving_head_ = 0;
   double moving_sum_ = 0.0;
   double block_sum_ = 0.0;
-  double block_time_ = 0.0;     ///< sum of the block's input times
+  double block_time_ = 0.0;  ///< sum of the block's input times
   int block_count_ = 0;
   long inputs_ = 0;
-  double last_time_ = 0.0;      ///< time of the newest input [s]
+  double last_time_ = 0.0;  ///< time of the newest input [s]
   std::vector<double> ring_;
   std::vector<double> times_;
   int head_ = 0;

@@ -71,12 +71,12 @@ private:
   using State = Eigen::Matrix<double, kOrder, 1>;
   State derivative(const State& q, double a) const;
 
-  double omega_ = 0.0;  ///< corner [rad/s]
+  double omega_ = 0.0;              ///< corner [rad/s]
   std::array<double, kOrder> k_{};  ///< (s + w)^4 = s^4 + k0 s^3 + k1 s^2 + k2 s + k3
-  State q_ = State::Zero();  ///< observer canonical form, q_[0] the position from rest
+  State q_ = State::Zero();         ///< observer canonical form, q_[0] the position from rest
   double previous_a_ = 0.0;
   bool started_ = false;
-  double elapsed_ = 0.0;     ///< time since the first sample [s]
+  double elapsed_ = 0.0;  ///< time since the first sample [s]
   // Least-squares start correction: normal equations of the free responses against the output.
   Eigen::Matrix<double, kOrder, kOrder> normal_ = Eigen::Matrix<double, kOrder, kOrder>::Zero();
   State moments_ = State::Zero();

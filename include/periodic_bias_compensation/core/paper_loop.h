@@ -19,11 +19,11 @@ namespace periodic_bias_compensation
 /// One sample of one axis.
 struct PaperStep
 {
-  double acceleration = 0.0;    ///< level acceleration less the constant bias [m/s^2]
-  double dt = 0.0;              ///< [s]
-  int period = 0;               ///< L [samples]; below kMinPaperPeriod: no periodic compensation
-  double constant_drift = 0.0;  ///< c [m/s]
-  double memory = 3.0;          ///< time constant of the residual variance [s]
+  double acceleration = 0.0;      ///< level acceleration less the constant bias [m/s^2]
+  double dt = 0.0;                ///< [s]
+  int period = 0;                 ///< L [samples]; below kMinPaperPeriod: no periodic compensation
+  double constant_drift = 0.0;    ///< c [m/s]
+  double memory = 3.0;            ///< time constant of the residual variance [s]
   double time_since_reset = 0.0;  ///< [s], for the variance of the integrated noise
 };
 
@@ -32,8 +32,8 @@ struct PaperOutput
   bool periodic = false;  ///< the periodic compensation ran (a period, and L values recorded)
   double position_filtered = 0.0, velocity_filtered = 0.0;  ///< [m], [m/s]
   double position_wave = 0.0, velocity_wave = 0.0;
-  double d_v = 0.0, d_p = 0.0;   ///< this step's drift terms (Eq. 6, 7)
-  double periodic_bias = 0.0;    ///< d_v / (L dt) [m/s^2]
+  double d_v = 0.0, d_p = 0.0;                              ///< this step's drift terms (Eq. 6, 7)
+  double periodic_bias = 0.0;                               ///< d_v / (L dt) [m/s^2]
   double position_variance = 0.0, velocity_variance = 0.0;  ///< integrated white noise
 };
 

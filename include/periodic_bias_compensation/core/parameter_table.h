@@ -88,7 +88,10 @@ struct ParameterInfo
   bool non_empty = false;                ///< text: the empty string is refused
   std::string range_reason;              ///< why the range is what it is (empty: evident)
 
-  bool reconfigurable() const { return reconfigure == Reconfigure::kRuntime; }
+  bool reconfigurable() const
+  {
+    return reconfigure == Reconfigure::kRuntime;
+  }
 };
 
 /// What a parameter accepts, for messages and documentation: "[0, 2)", "default, paper",
@@ -108,7 +111,10 @@ struct Parameter : ParameterInfo
   std::function<void(Config&, const ParameterValue&)> set;
 
   /// The default is the value in a default-constructed Config.
-  ParameterValue defaultValue() const { return get(Config{}); }
+  ParameterValue defaultValue() const
+  {
+    return get(Config{});
+  }
 };
 
 template <class Config>
@@ -132,7 +138,10 @@ Parameter<Config> makeParameter(ParameterInfo info, Access access)
 template <class Config, class T>
 auto member(T Config::*field)
 {
-  return [field](auto& config) -> auto& { return config.*field; };
+  return [field](auto& config) -> auto&
+  {
+    return config.*field;
+  };
 }
 
 /// The fields every parameter has.

@@ -118,8 +118,7 @@ private:
   /// kMaxPeriod.
   bool continues(double dt) const
   {
-    return dt > 0.0 &&
-           (dt <= max_gap_ || (dt <= kMaxPeriod && (period_ <= 0.0 || dt <= kSlowStreamSteps * period_)));
+    return dt > 0.0 && (dt <= max_gap_ || (dt <= kMaxPeriod && (period_ <= 0.0 || dt <= kSlowStreamSteps * period_)));
   }
   void accept(double t, double dt);
   void startRecord();
@@ -137,11 +136,12 @@ private:
   // Line fit of stamps against ticks over the last kRateWindow seconds (a ring).
   std::vector<double> ticks_;
   std::vector<double> stamps_;
-  std::size_t fit_next_ = 0;   ///< where the next entry goes
+  std::size_t fit_next_ = 0;  ///< where the next entry goes
   std::size_t fit_count_ = 0;
   double tick_ = 0.0;
   double last_ticks_ = 1.0;
-  double skipped_ = 0.0;     ///< stamps dropped since the newest accepted one  ///< periods the newest accepted sample was counted after its predecessor
+  double skipped_ =
+      0.0;  ///< stamps dropped since the newest accepted one  ///< periods the newest accepted sample was counted after its predecessor
   int since_fit_ = 0;
   std::vector<double> scratch_;
   bool has_line_ = false;    ///< the fit's line is known: ticks come from it

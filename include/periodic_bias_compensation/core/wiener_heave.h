@@ -36,30 +36,30 @@ class RealFft;
 /// One step's output of WienerHeave.
 struct WienerHeaveOutput
 {
-  bool valid = false;         ///< false until the first design, and while it is stale
-  double position = 0.0;      ///< wave displacement [m]
-  double velocity = 0.0;      ///< [m/s]
-  double error_variance = 0.0;  ///< the design's expected displacement error variance [m^2]
+  bool valid = false;                    ///< false until the first design, and while it is stale
+  double position = 0.0;                 ///< wave displacement [m]
+  double velocity = 0.0;                 ///< [m/s]
+  double error_variance = 0.0;           ///< the design's expected displacement error variance [m^2]
   double velocity_error_variance = 0.0;  ///< [m^2/s^2]
 };
 
 class WienerHeave
 {
 public:
-  static constexpr double kDesignPeriod = 0.5;     ///< target spacing of the design rate [s]
-  static constexpr double kFirstDesign = 60.0;    ///< data before the first design [s]
-  static constexpr double kDesignWindow = 600.0;   ///< data a design uses at most [s]
+  static constexpr double kDesignPeriod = 0.5;       ///< target spacing of the design rate [s]
+  static constexpr double kFirstDesign = 60.0;       ///< data before the first design [s]
+  static constexpr double kDesignWindow = 600.0;     ///< data a design uses at most [s]
   static constexpr double kRedesignInterval = 30.0;  ///< [s]
-  static constexpr int kSegment = 256;             ///< Welch segment [design-rate samples]
-  static constexpr int kMinSegment = 64;           ///< the shortest, for early designs
-  static constexpr int kDftSize = 1024;            ///< zero-padded transform of a segment
-  static constexpr double kSpanPeriods = 6.0;      ///< FIR span in peak periods
-  static constexpr double kMinSpan = 20.0;         ///< [s]
-  static constexpr double kMaxSpan = 120.0;        ///< [s]
-  static constexpr double kNoiseMargin = 3.0;      ///< multiples of the noise floor taken as noise
-  static constexpr double kDesignFade = 2.0;       ///< [s]
-  static constexpr double kMinPeriod = 1e-4;       ///< shortest sample period taken (10 kHz) [s]
-  static constexpr double kMaxPeriod = 10.0;       ///< longest [s]
+  static constexpr int kSegment = 256;               ///< Welch segment [design-rate samples]
+  static constexpr int kMinSegment = 64;             ///< the shortest, for early designs
+  static constexpr int kDftSize = 1024;              ///< zero-padded transform of a segment
+  static constexpr double kSpanPeriods = 6.0;        ///< FIR span in peak periods
+  static constexpr double kMinSpan = 20.0;           ///< [s]
+  static constexpr double kMaxSpan = 120.0;          ///< [s]
+  static constexpr double kNoiseMargin = 3.0;        ///< multiples of the noise floor taken as noise
+  static constexpr double kDesignFade = 2.0;         ///< [s]
+  static constexpr double kMinPeriod = 1e-4;         ///< shortest sample period taken (10 kHz) [s]
+  static constexpr double kMaxPeriod = 10.0;         ///< longest [s]
 
   /// min_frequency [Hz]: the lowest wave frequency; below it nothing is heave.
   explicit WienerHeave(double min_frequency = 0.04);
@@ -93,7 +93,7 @@ private:
   {
     std::vector<double> position;  ///< FIR taps, newest first
     std::vector<double> velocity;
-    double mean = 0.0;             ///< the design window's mean acceleration, taken off first
+    double mean = 0.0;  ///< the design window's mean acceleration, taken off first
     double error_variance = 0.0;
     double velocity_error_variance = 0.0;
   };

@@ -35,23 +35,29 @@ struct TruthTrack
   std::vector<Eigen::Vector3d> velocity;          ///< body frame [m/s] (odometry twist)
   std::vector<Eigen::Vector3d> angular_velocity;  ///< body frame [rad/s]
 
-  std::size_t size() const { return stamp.size(); }
+  std::size_t size() const
+  {
+    return stamp.size();
+  }
 };
 
 /// An IMU recording in SI units (REP-145, sensor frame). Samples in stamp order as recorded.
 struct Recording
 {
-  double rate = 0.0;                 ///< nominal sample rate [Hz] (0: estimate from stamps)
-  std::vector<double> stamp;         ///< reported time stamps [s]
-  Eigen::MatrixXd data;              ///< N x 6: ax, ay, az [m/s^2], gx, gy, gz [rad/s]
+  double rate = 0.0;          ///< nominal sample rate [Hz] (0: estimate from stamps)
+  std::vector<double> stamp;  ///< reported time stamps [s]
+  Eigen::MatrixXd data;       ///< N x 6: ax, ay, az [m/s^2], gx, gy, gz [rad/s]
   bool has_orientation = false;
   std::vector<Eigen::Quaterniond> orientation;  ///< reported sensor -> ENU
   bool has_temperature = false;
-  std::vector<double> temperature;   ///< [degC]
-  std::string source;                ///< file name or "sim seed N"
-  TruthTrack truth;                  ///< empty when the recording has no truth
+  std::vector<double> temperature;  ///< [degC]
+  std::string source;               ///< file name or "sim seed N"
+  TruthTrack truth;                 ///< empty when the recording has no truth
 
-  std::size_t size() const { return stamp.size(); }
+  std::size_t size() const
+  {
+    return stamp.size();
+  }
 };
 
 /// Median of the values (the mean of the two middle ones for an even count; NaN when empty).
@@ -76,8 +82,8 @@ sim::Scenario matchScenario(const sim::Scenario& scenario, const Recording& real
 /// One-sided Welch PSD of a signal (Hann window, 50 % overlap, mean removed per segment).
 struct Psd
 {
-  double df = 0.0;                  ///< bin spacing [Hz]
-  std::vector<double> power;        ///< [unit^2 / Hz], bins 0 .. nseg / 2
+  double df = 0.0;            ///< bin spacing [Hz]
+  std::vector<double> power;  ///< [unit^2 / Hz], bins 0 .. nseg / 2
 };
 
 /// @param x samples
@@ -115,12 +121,12 @@ double repeatedFraction(const Eigen::MatrixXd& data);
 /// by the nominal rate, and the lost samples that index implies.
 struct StampStats
 {
-  double rate = 0.0;             ///< fitted rate [Hz]
-  double jitter = 0.0;           ///< robust standard deviation of the residual [s]
-  double lost_fraction = 0.0;    ///< missing / expected samples [-]
-  double bursts = 0.0;           ///< number of gaps [-]
-  double mean_burst = 0.0;       ///< mean number of missing samples per gap [-]
-  double backwards = 0.0;        ///< stamps earlier than their predecessor [-]
+  double rate = 0.0;           ///< fitted rate [Hz]
+  double jitter = 0.0;         ///< robust standard deviation of the residual [s]
+  double lost_fraction = 0.0;  ///< missing / expected samples [-]
+  double bursts = 0.0;         ///< number of gaps [-]
+  double mean_burst = 0.0;     ///< mean number of missing samples per gap [-]
+  double backwards = 0.0;      ///< stamps earlier than their predecessor [-]
 };
 StampStats stampStats(const std::vector<double>& stamp, double rate);
 
@@ -132,7 +138,8 @@ StampStats stampStats(const std::vector<double>& stamp, double rate);
 /// central difference of the world velocity (the twist rotated into the world, or position
 /// differences), the angular rate the twist's (or from orientation differences); both are
 /// smoothed by a centred moving average of `smooth` s, then interpolated to the stamps.
-Eigen::MatrixXd idealFromTruth(const TruthTrack& truth, const std::vector<double>& stamps, double gravity, double smooth);
+Eigen::MatrixXd idealFromTruth(const TruthTrack& truth, const std::vector<double>& stamps, double gravity,
+                               double smooth);
 
 /// Centred moving average of `smooth` s over the columns (stamps give the rate).
 Eigen::MatrixXd movingAverage(const Eigen::MatrixXd& x, double rate, double smooth);
@@ -162,14 +169,14 @@ FeatureLayout stageLayout(double duration, int segments);
 /// Where a feature lives.
 struct FeatureInfo
 {
-  std::string channel;   ///< "ax".."gz", "accel", "gyro", "stamp", "orientation"
-  std::string quantity;  ///< "psd", "allan", "mean", "std", "corr", "flat_top", "lattice", "jitter", ...
-  std::string range;     ///< band "0.1-0.2 Hz", tau "1.28 s", "" for none
-  double lo = 0.0;       ///< band low edge [Hz] or tau [s]
-  double hi = 0.0;       ///< band high edge [Hz] or tau [s]
-  std::string segment;   ///< "all" or "seg k/n"
-  std::string stage;     ///< "sensor" (raw data), "stamps", "orientation"
-  double floor = 0.0;    ///< smallest spread used for z-scores [feature unit]
+  std::string channel;     ///< "ax".."gz", "accel", "gyro", "stamp", "orientation"
+  std::string quantity;    ///< "psd", "allan", "mean", "std", "corr", "flat_top", "lattice", "jitter", ...
+  std::string range;       ///< band "0.1-0.2 Hz", tau "1.28 s", "" for none
+  double lo = 0.0;         ///< band low edge [Hz] or tau [s]
+  double hi = 0.0;         ///< band high edge [Hz] or tau [s]
+  std::string segment;     ///< "all" or "seg k/n"
+  std::string stage;       ///< "sensor" (raw data), "stamps", "orientation"
+  double floor = 0.0;      ///< smallest spread used for z-scores [feature unit]
   double rel_floor = 0.0;  ///< plus this fraction of |ensemble median|
 };
 
@@ -181,13 +188,13 @@ FeatureInfo segmentInfo(const std::string& channel, const std::string& quantity,
 struct FeatureLayout
 {
   double rate = 0.0;
-  int nseg = 0;                       ///< Welch segment length
-  std::vector<double> band_edges;     ///< log bands [Hz], half-octave
-  std::vector<int> allan_m;           ///< cluster sizes (octaves)
-  int segments = 4;                   ///< time segments for mean / std
-  bool orientation = false;           ///< tilt features (the real recording has orientation)
-  bool temperature = false;           ///< temperature-slope features
-  std::vector<FeatureInfo> info;      ///< one per feature value
+  int nseg = 0;                    ///< Welch segment length
+  std::vector<double> band_edges;  ///< log bands [Hz], half-octave
+  std::vector<int> allan_m;        ///< cluster sizes (octaves)
+  int segments = 4;                ///< time segments for mean / std
+  bool orientation = false;        ///< tilt features (the real recording has orientation)
+  bool temperature = false;        ///< temperature-slope features
+  std::vector<FeatureInfo> info;   ///< one per feature value
 };
 
 /// Layout for recordings at this rate with this many samples.
@@ -241,28 +248,28 @@ std::vector<Departure> rankDepartures(const std::vector<double>& real, const Ens
 
 struct DiagnoseOptions
 {
-  int ensemble = 8;              ///< simulated runs per model
-  double fit_fraction = 0.6;     ///< the fit sees [0, fit_fraction), the gap is measured after
+  int ensemble = 8;           ///< simulated runs per model
+  double fit_fraction = 0.6;  ///< the fit sees [0, fit_fraction), the gap is measured after
   int threads = 2;
-  double min_shrink = 0.3;       ///< below: "no candidate explains the gap"
-  double pair_gain = 0.15;       ///< a pair is reported if it shrinks this much more
+  double min_shrink = 0.3;            ///< below: "no candidate explains the gap"
+  double pair_gain = 0.15;            ///< a pair is reported if it shrinks this much more
   std::uint64_t seed_base = 1000003;  ///< ensemble seeds seed_base + i (never the real's)
-  double truth_smooth = 0.2;     ///< moving average of the truth comparison [s]
-  int truth_segments = 8;        ///< time segments of the truth comparison
+  double truth_smooth = 0.2;          ///< moving average of the truth comparison [s]
+  int truth_segments = 8;             ///< time segments of the truth comparison
   bool verbose = false;
 };
 
 /// One candidate effect with fitted parameters and its gap on the withheld part.
 struct Candidate
 {
-  std::string effect;                          ///< vocabulary name, or "a+b" for a pair
-  std::vector<sim::EffectSpec> specs;          ///< what is added / changed in the scenario
-  std::string params_json;                     ///< fitted parameters (JSON object)
-  std::string note;                            ///< how it was fitted
+  std::string effect;                  ///< vocabulary name, or "a+b" for a pair
+  std::vector<sim::EffectSpec> specs;  ///< what is added / changed in the scenario
+  std::string params_json;             ///< fitted parameters (JSON object)
+  std::string note;                    ///< how it was fitted
   double gap_before = 0.0;
   double gap_after = 0.0;
-  double shrink = 0.0;  ///< (before - after) / (before - typical null gap), at most 1
-  std::vector<double> z_after;                 ///< withheld z-scores with the effect
+  double shrink = 0.0;          ///< (before - after) / (before - typical null gap), at most 1
+  std::vector<double> z_after;  ///< withheld z-scores with the effect
 };
 
 // ---------------------------------------------------------------------------------------------
@@ -271,11 +278,11 @@ struct Candidate
 /// The motion of one recording, as the diagnosis compares it.
 struct MotionSummary
 {
-  double roll = 0.0;          ///< standing tilt from the mean specific force, sensor frame [rad]
-  double pitch = 0.0;         ///< [rad]
-  double heading = NAN;       ///< mean heading from the reported orientation (NaN without) [rad]
-  double wave_height = 0.0;   ///< 4 sqrt(m0) of the heave in the 2-25 s band [m]
-  double peak_period = 0.0;   ///< period of the heave spectrum's peak in that band [s] (0: none)
+  double roll = 0.0;         ///< standing tilt from the mean specific force, sensor frame [rad]
+  double pitch = 0.0;        ///< [rad]
+  double heading = NAN;      ///< mean heading from the reported orientation (NaN without) [rad]
+  double wave_height = 0.0;  ///< 4 sqrt(m0) of the heave in the 2-25 s band [m]
+  double peak_period = 0.0;  ///< period of the heave spectrum's peak in that band [s] (0: none)
 };
 
 /// Heave from the vertical specific force (through the reported orientation when there is one,
@@ -286,22 +293,22 @@ MotionSummary summariseMotion(const Recording& recording);
 /// A motion fitted to the recording, to be tried on the withheld part.
 struct MotionCandidate
 {
-  std::string what;         ///< "tilt and heading", "sea state", or both
-  sim::Scenario scenario;   ///< the scenario with it
+  std::string what;        ///< "tilt and heading", "sea state", or both
+  sim::Scenario scenario;  ///< the scenario with it
 };
 
 /// The recording's motion against the ensemble's, and the scenario fitted to it.
 struct MotionFit
 {
-  bool differs = false;         ///< a tilt, heading or sea state beyond the ensemble's spread
-  MotionSummary real;           ///< the recording's
-  MotionSummary scenario;       ///< the ensemble's mean
-  std::vector<std::string> findings;  ///< one line per difference, in words
+  bool differs = false;                     ///< a tilt, heading or sea state beyond the ensemble's spread
+  MotionSummary real;                       ///< the recording's
+  MotionSummary scenario;                   ///< the ensemble's mean
+  std::vector<std::string> findings;        ///< one line per difference, in words
   std::vector<MotionCandidate> candidates;  ///< fits to try, the whole one first
-  std::string adopted;          ///< the candidate that brought the withheld part closest ("" none)
-  sim::Scenario fitted;         ///< the scenario with the adopted candidate (as given without)
-  double gap_before = 0.0;      ///< withheld gap against the scenario as given
-  double gap_after = 0.0;       ///< against `fitted` (equal when nothing is adopted)
+  std::string adopted;                      ///< the candidate that brought the withheld part closest ("" none)
+  sim::Scenario fitted;                     ///< the scenario with the adopted candidate (as given without)
+  double gap_before = 0.0;                  ///< withheld gap against the scenario as given
+  double gap_after = 0.0;                   ///< against `fitted` (equal when nothing is adopted)
 };
 
 /// Compares the recording with runs of the scenario (same duration and rate). A standing tilt
@@ -328,45 +335,45 @@ struct Report
   double rate = 0.0;
   double duration = 0.0;
   std::size_t samples = 0;
-  FeatureLayout layout_all;                    ///< layout of the whole recording ("where")
+  FeatureLayout layout_all;  ///< layout of the whole recording ("where")
   std::vector<double> real_all;
   EnsembleStats ens_all;
   std::vector<Departure> where;
   double gap_all = 0.0;
-  double null_gap = 0.0;                       ///< largest gap of one ensemble member vs the rest
-  FeatureLayout layout_held;                   ///< layout of the withheld part
+  double null_gap = 0.0;      ///< largest gap of one ensemble member vs the rest
+  FeatureLayout layout_held;  ///< layout of the withheld part
   std::vector<double> real_held;
   EnsembleStats ens_held;
-  double gap_before = 0.0;                     ///< withheld part, scenario as given
+  double gap_before = 0.0;  ///< withheld part, scenario as given
   double null_gap_held = 0.0;
-  double null_gap_typical = 0.0;               ///< median gap of one member vs the rest (shrink reference)
-  double max_z_held = 0.0;                     ///< largest |z| of the real withheld part
-  double null_max_z_held = 0.0;                ///< largest |z| of one member vs the rest
-  std::vector<Candidate> ranking;              ///< best first
+  double null_gap_typical = 0.0;   ///< median gap of one member vs the rest (shrink reference)
+  double max_z_held = 0.0;         ///< largest |z| of the real withheld part
+  double null_max_z_held = 0.0;    ///< largest |z| of one member vs the rest
+  std::vector<Candidate> ranking;  ///< best first
   std::vector<DirectDetection> direct;
   // verdict
-  std::string verdict_effect;                  ///< effect name, "a+b", "none" (no candidate explains) or "no_gap"
-  std::string verdict_params;                  ///< JSON
+  std::string verdict_effect;  ///< effect name, "a+b", "none" (no candidate explains) or "no_gap"
+  std::string verdict_params;  ///< JSON
   double confidence = 0.0;
   double shrink_withheld = 0.0;
   std::string verdict_text;
-  int best = -1;                               ///< index of the verdict in ranking, -1 for none
+  int best = -1;  ///< index of the verdict in ranking, -1 for none
   // localised places: top departures of the withheld part, before and after the verdict
   std::vector<Departure> where_held;
   std::vector<double> where_held_after;
-  double seconds = 0.0;                        ///< wall time
+  double seconds = 0.0;  ///< wall time
   // Curves for plots (CSV text): withheld part, real vs ensemble median vs ensemble with the verdict.
-  std::string psd_csv;    ///< channel,f,real,sim,sim_effect
-  std::string allan_csv;  ///< channel,tau,real,sim,sim_effect
-  std::string drift_csv;  ///< channel,t,real,sim_lo,sim_med,sim_hi,sim_effect_med (block means, whole recording)
+  std::string psd_csv;       ///< channel,f,real,sim,sim_effect
+  std::string allan_csv;     ///< channel,tau,real,sim,sim_effect
+  std::string drift_csv;     ///< channel,t,real,sim_lo,sim_med,sim_hi,sim_effect_med (block means, whole recording)
   std::string features_csv;  ///< index,channel,quantity,range,segment,real,sim,spread,z_before,z_after
   std::vector<std::vector<double>> ens_held_members;  ///< for plots
   // Truth (when the recording has one): real minus the ideal IMU of its truth, against the same
   // residual of every ensemble member (its own truth); departures also go into `where`.
   bool has_truth = false;
-  std::vector<Departure> truth_where;          ///< stage "truth", quantity truth_mean / truth_std
-  std::vector<Departure> stage_where;          ///< stage "compensator" (its pipeline on real vs ensemble)
-  std::string truth_csv;  ///< channel,t,real,sim_lo,sim_med,sim_hi (block means of the residual)
+  std::vector<Departure> truth_where;  ///< stage "truth", quantity truth_mean / truth_std
+  std::vector<Departure> stage_where;  ///< stage "compensator" (its pipeline on real vs ensemble)
+  std::string truth_csv;               ///< channel,t,real,sim_lo,sim_med,sim_hi (block means of the residual)
 };
 
 /// Full diagnosis of a real recording against a scenario.

@@ -107,8 +107,8 @@ private:
   };
   struct Chunk
   {
-    std::vector<std::uint8_t> data;                ///< its records, uncompressed
-    std::vector<std::vector<IndexEntry>> index;    ///< per connection
+    std::vector<std::uint8_t> data;              ///< its records, uncompressed
+    std::vector<std::vector<IndexEntry>> index;  ///< per connection
     std::uint32_t messages = 0;
     ros::Time start, end;
   };
@@ -130,18 +130,18 @@ private:
   Compression compression_;
   std::uint32_t chunk_threshold_;
   std::vector<Connection> connections_;
-  Chunk chunk_;                                     ///< the open chunk
+  Chunk chunk_;  ///< the open chunk
   // Written by storeChunk only (the thread's while it runs).
-  std::uint64_t position_ = 0;                      ///< file offset of the next byte written
+  std::uint64_t position_ = 0;  ///< file offset of the next byte written
   std::vector<char> compressed_;
   std::vector<ChunkInfo> chunks_;
-  std::vector<std::uint8_t> record_;                ///< scratch for records
+  std::vector<std::uint8_t> record_;  ///< scratch for records
   // The thread and what it shares.
   std::thread thread_;
   std::mutex mutex_;
   std::condition_variable changed_;
-  std::deque<Chunk> pending_;                       ///< full chunks, oldest first
-  std::vector<Chunk> free_;                         ///< stored chunks, their buffers reused
+  std::deque<Chunk> pending_;  ///< full chunks, oldest first
+  std::vector<Chunk> free_;    ///< stored chunks, their buffers reused
   bool stopping_ = false;
   std::exception_ptr error_;
 };

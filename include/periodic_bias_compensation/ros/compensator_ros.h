@@ -8,7 +8,6 @@
 #include <memory>
 #include <string>
 
-#include <boost/thread/recursive_mutex.hpp>
 #include <diagnostic_updater/diagnostic_updater.h>
 #include <dynamic_reconfigure/server.h>
 #include <geometry_msgs/PoseStamped.h>
@@ -18,6 +17,7 @@
 #include <tf2_ros/buffer.h>
 #include <tf2_ros/transform_broadcaster.h>
 #include <tf2_ros/transform_listener.h>
+#include <boost/thread/recursive_mutex.hpp>
 
 #include "periodic_bias_compensation/CompensatorConfig.h"
 #include "periodic_bias_compensation/core/compensator.h"
@@ -80,7 +80,8 @@ private:
   /// The input's own faults for diagnose(): units, output stopped while input arrives.
   void diagnoseInput(const ros::Time& now, const std::function<void(std::uint8_t, const std::string&)>& raise) const;
   /// What changed since the last diagnose(): samples dropped, resets, refused reconfigures.
-  void diagnoseEvents(const CompensatorCounters& core, const std::function<void(std::uint8_t, const std::string&)>& raise) const;
+  void diagnoseEvents(const CompensatorCounters& core,
+                      const std::function<void(std::uint8_t, const std::string&)>& raise) const;
   /// Standing conditions: orientation missing, paper-mode periods too short, identity mounting.
   void diagnoseSetup(const std::function<void(std::uint8_t, const std::string&)>& raise) const;
   /// The key-value pairs of the status.
@@ -104,7 +105,7 @@ private:
   Mounting mounting_;
   MountingState mounting_state_ = MountingState::kWaiting;
   ros::WallTime mounting_warned_;  ///< when the identity mounting was last said (WARN)
-  double first_stamp_ = -1.0;  ///< stamp of the first message [s], for mount_timeout
+  double first_stamp_ = -1.0;      ///< stamp of the first message [s], for mount_timeout
   tf2_ros::Buffer tf_buffer_;
   std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
   std::unique_ptr<tf2_ros::TransformBroadcaster> tf_broadcaster_;
@@ -128,9 +129,9 @@ private:
   WrapperCounters counters_;
   bool has_output_ = false;
   CompensatorOutput last_output_;
-  ros::Time last_receive_;  ///< ROS time of the last message on imu/data
-  ros::Time last_publish_;  ///< ROS time of the last odometry published (zero: none yet)
-  ros::Time first_receive_; ///< ROS time of the first message on imu/data
+  ros::Time last_receive_;         ///< ROS time of the last message on imu/data
+  ros::Time last_publish_;         ///< ROS time of the last odometry published (zero: none yet)
+  ros::Time first_receive_;        ///< ROS time of the first message on imu/data
   bool seen_orientation_ = false;  ///< some message carried an orientation
   bool has_orientation_ = false;   ///< the last accepted message carried one
   std::string last_refusal_;       ///< why the last reconfigure request was refused

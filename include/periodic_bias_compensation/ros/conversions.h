@@ -4,10 +4,10 @@
 
 #include <string>
 
-#include <boost/array.hpp>
 #include <nav_msgs/Odometry.h>
 #include <ros/time.h>
 #include <sensor_msgs/Imu.h>
+#include <boost/array.hpp>
 
 #include "periodic_bias_compensation/BiasState.h"
 #include "periodic_bias_compensation/core/compensator.h"
@@ -48,8 +48,8 @@ enum class OdometryKind
 /// Frames of the published odometry.
 struct OdometryFrames
 {
-  std::string odom_frame = "odom";      ///< header.frame_id (level ENU frame of the core)
-  std::string base_frame = "base_link"; ///< child_frame_id
+  std::string odom_frame = "odom";       ///< header.frame_id (level ENU frame of the core)
+  std::string base_frame = "base_link";  ///< child_frame_id
 };
 
 /// Builds odometry/filtered or odometry/wave from one core output.
@@ -62,8 +62,7 @@ nav_msgs::Odometry toOdometry(const CompensatorOutput& out, OdometryKind kind, c
                               const Mounting& mounting, const OdometryFrames& frames, const ros::Time& stamp);
 
 /// Builds the BiasState message (level frame) from one core output.
-BiasState toBiasState(const CompensatorOutput& out, Mode mode, const std::string& odom_frame,
-                      const ros::Time& stamp);
+BiasState toBiasState(const CompensatorOutput& out, Mode mode, const std::string& odom_frame, const ros::Time& stamp);
 
 /// True when every floating-point field that is published is finite.
 bool allFinite(const nav_msgs::Odometry& msg);
@@ -83,8 +82,14 @@ public:
   /// Requires frame_id from now on, unless a frame is known already or it is empty.
   void learn(const std::string& frame_id);
   /// The frame required from now on; empty before the first message when none was configured.
-  const std::string& expected() const { return expected_; }
-  bool known() const { return fixed_; }
+  const std::string& expected() const
+  {
+    return expected_;
+  }
+  bool known() const
+  {
+    return fixed_;
+  }
 
 private:
   std::string expected_;

@@ -20,16 +20,16 @@ namespace periodic_bias_compensation
 /// Settings of the ROS side (frames, outputs, start-up).
 struct RosOptions
 {
-  std::string odom_frame = "odom";      ///< frame of the published odometry
-  std::string base_frame = "base_link"; ///< child frame of the odometry, target of the mounting
-  std::string imu_frame;                ///< required frame_id of imu/data; empty = first one seen
-  bool publish_tf = false;              ///< broadcast odom -> base_frame from odometry/filtered
-  int path_max_length = 2000;           ///< poses kept in path/filtered and path/raw [-]
-  double path_rate = 2.0;               ///< rate of path poses and path messages [Hz]
-  double mount_timeout = 1.0;           ///< wait for the imu -> base transform (message time) [s]
-  bool identity_mounting = false;       ///< the IMU is mounted aligned with base_frame: no lookup
-  std::string calibration_file;         ///< constant-bias YAML; loaded at start when it exists
-  double diagnostic_period = 1.0;       ///< period of /diagnostics (read by diagnostic_updater) [s]
+  std::string odom_frame = "odom";       ///< frame of the published odometry
+  std::string base_frame = "base_link";  ///< child frame of the odometry, target of the mounting
+  std::string imu_frame;                 ///< required frame_id of imu/data; empty = first one seen
+  bool publish_tf = false;               ///< broadcast odom -> base_frame from odometry/filtered
+  int path_max_length = 2000;            ///< poses kept in path/filtered and path/raw [-]
+  double path_rate = 2.0;                ///< rate of path poses and path messages [Hz]
+  double mount_timeout = 1.0;            ///< wait for the imu -> base transform (message time) [s]
+  bool identity_mounting = false;        ///< the IMU is mounted aligned with base_frame: no lookup
+  std::string calibration_file;          ///< constant-bias YAML; loaded at start when it exists
+  double diagnostic_period = 1.0;        ///< period of /diagnostics (read by diagnostic_updater) [s]
 
   /// False with a message naming the key when a value is out of range (rosOptionParameters())
   /// or odom_frame equals base_frame.

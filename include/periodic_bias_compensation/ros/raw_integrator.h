@@ -17,7 +17,10 @@ public:
   void add(double t, const Vector3& acceleration, bool restart);
   /// Back to zero position and velocity (stamps went backwards).
   void reset();
-  const Vector3& position() const { return position_; }  ///< [m]
+  const Vector3& position() const
+  {
+    return position_;
+  }  ///< [m]
 
 private:
   bool started_ = false;

@@ -56,19 +56,19 @@ EffectSpec completeEffect(const EffectSpec& spec, const std::string& where = "ef
 /// What an effect sees of the sample being produced.
 struct EffectInput
 {
-  double elapsed = 0.0;           ///< true time since start [s]
-  const Truth* truth = nullptr;   ///< exact motion of base_link
-  double temperature = 0.0;       ///< [degC]
+  double elapsed = 0.0;          ///< true time since start [s]
+  const Truth* truth = nullptr;  ///< exact motion of base_link
+  double temperature = 0.0;      ///< [degC]
   bool has_temperature = false;
 };
 
 /// What effects modify.
 struct ImuOutput
 {
-  Vector3 accel = Vector3::Zero();  ///< specific force, sensor frame [m/s^2]
-  Vector3 gyro = Vector3::Zero();   ///< angular rate, sensor frame [rad/s]
+  Vector3 accel = Vector3::Zero();                  ///< specific force, sensor frame [m/s^2]
+  Vector3 gyro = Vector3::Zero();                   ///< angular rate, sensor frame [rad/s]
   Quaternion orientation = Quaternion::Identity();  ///< reported sensor -> ENU
-  double stamp_offset = 0.0;        ///< added to the true time stamp [s]
+  double stamp_offset = 0.0;                        ///< added to the true time stamp [s]
   bool dropped = false;
 };
 

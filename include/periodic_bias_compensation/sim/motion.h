@@ -47,13 +47,13 @@ public:
 private:
   struct Segment
   {
-    double start;           ///< [s]
-    double end;             ///< [s]
-    Vector3 position;       ///< at start [m]
-    double heading;         ///< at start [rad]
-    double speed;           ///< at start [m/s]
-    double turn_rate;       ///< [rad/s]
-    double acceleration;    ///< along track [m/s^2]
+    double start;         ///< [s]
+    double end;           ///< [s]
+    Vector3 position;     ///< at start [m]
+    double heading;       ///< at start [rad]
+    double speed;         ///< at start [m/s]
+    double turn_rate;     ///< [rad/s]
+    double acceleration;  ///< along track [m/s^2]
   };
   std::vector<Segment> segments_;
 };
@@ -102,7 +102,10 @@ public:
   Truth evaluate(std::int64_t k);
 
   /// The sea's components (empty without a sea).
-  const std::vector<WaveComponent>& waveComponents() const { return components_; }
+  const std::vector<WaveComponent>& waveComponents() const
+  {
+    return components_;
+  }
 
 private:
   using Dofs = std::array<double, 18>;  ///< q, dq, ddq for each Dof: index 3 * dof + order

@@ -41,8 +41,8 @@ struct WaveSystem
   double significant_height = 1.0;   ///< Hs [m]
   double peak_period = 8.0;          ///< Tp [s]
   double gamma = 3.3;                ///< JONSWAP peak enhancement [-]
-  double direction = 0.0;  ///< direction the waves travel TOWARD, ENU yaw (0 = east) [rad]
-  double spreading = 0.0;  ///< standard deviation of component directions [rad] (0 = long-crested)
+  double direction = 0.0;            ///< direction the waves travel TOWARD, ENU yaw (0 = east) [rad]
+  double spreading = 0.0;            ///< standard deviation of component directions [rad] (0 = long-crested)
 };
 
 /// Irregular sea with a simple per-DOF ship response.
@@ -91,24 +91,24 @@ std::string toString(MotionType type);
 struct Motion
 {
   MotionType type = MotionType::kStatic;
-  Vector3 position = Vector3::Zero();  ///< initial position, ENU [m]
-  double heading = 0.0;  ///< initial heading, ENU yaw [rad]
-  double roll = 0.0;     ///< constant roll offset [rad]
-  double pitch = 0.0;    ///< constant pitch offset [rad]
-  double speed = 0.0;    ///< forward speed (sinusoids, sea) [m/s]
+  Vector3 position = Vector3::Zero();   ///< initial position, ENU [m]
+  double heading = 0.0;                 ///< initial heading, ENU yaw [rad]
+  double roll = 0.0;                    ///< constant roll offset [rad]
+  double pitch = 0.0;                   ///< constant pitch offset [rad]
+  double speed = 0.0;                   ///< forward speed (sinusoids, sea) [m/s]
   std::array<Sinusoid, 6> sinusoids{};  ///< per Dof (sinusoids)
-  Sea sea;               ///< sea, route (route: used when sea.systems is not empty)
-  Route route;           ///< route
+  Sea sea;                              ///< sea, route (route: used when sea.systems is not empty)
+  Route route;                          ///< route
 };
 
 /// Sensor temperature: mean + amplitude * sin(2 pi elapsed / period + phase).
 struct TemperatureProfile
 {
   bool enabled = false;
-  double mean = 20.0;        ///< [degC]
-  double amplitude = 0.0;    ///< [K]
-  double period = 86400.0;   ///< [s]
-  double phase = 0.0;        ///< [rad]
+  double mean = 20.0;       ///< [degC]
+  double amplitude = 0.0;   ///< [K]
+  double period = 86400.0;  ///< [s]
+  double phase = 0.0;       ///< [rad]
 };
 
 /// One sensor effect, by name (see effectVocabulary()) with its parameters. Missing
@@ -124,12 +124,12 @@ struct EffectSpec
 /// A complete scenario.
 struct Scenario
 {
-  std::string name;                 ///< free text
-  std::string description;          ///< free text
-  double rate = 100.0;              ///< IMU sample rate [Hz]
-  double duration = 60.0;           ///< simulated time [s]
-  double start_time = 1000.0;       ///< time stamp of the first sample [s] (> 0)
-  std::uint64_t seed = 1;           ///< default seed (the command line may override it)
+  std::string name;                   ///< free text
+  std::string description;            ///< free text
+  double rate = 100.0;                ///< IMU sample rate [Hz]
+  double duration = 60.0;             ///< simulated time [s]
+  double start_time = 1000.0;         ///< time stamp of the first sample [s] (> 0)
+  std::uint64_t seed = 1;             ///< default seed (the command line may override it)
   double gravity = kStandardGravity;  ///< [m/s^2]
   double orientation_stddev = 0.01;   ///< stated accuracy of the reported orientation [rad]
   Motion motion;

@@ -46,10 +46,10 @@ void idealImu(const Truth& truth, double gravity, Vector3* accel, Vector3* gyro)
 /// frame given by the orientation.
 struct OdometryState
 {
-  Vector3 position = Vector3::Zero();                 ///< ENU [m]
-  Quaternion orientation = Quaternion::Identity();    ///< child -> ENU
-  Vector3 linear_velocity = Vector3::Zero();          ///< child frame [m/s]
-  Vector3 angular_velocity = Vector3::Zero();         ///< child frame [rad/s]
+  Vector3 position = Vector3::Zero();               ///< ENU [m]
+  Quaternion orientation = Quaternion::Identity();  ///< child -> ENU
+  Vector3 linear_velocity = Vector3::Zero();        ///< child frame [m/s]
+  Vector3 angular_velocity = Vector3::Zero();       ///< child frame [rad/s]
 };
 
 /// The truth as three odometries (ground_truth/odometry, ground_truth/slow,
@@ -82,13 +82,22 @@ public:
   bool next(Sample* sample);
 
   /// Total number of samples.
-  std::int64_t sampleCount() const { return count_; }
+  std::int64_t sampleCount() const
+  {
+    return count_;
+  }
 
   /// The scenario, effects completed with their defaults.
-  const Scenario& scenario() const { return scenario_; }
+  const Scenario& scenario() const
+  {
+    return scenario_;
+  }
 
   /// The motion model (e.g. for its wave components).
-  const ShipMotion& motion() const { return motion_; }
+  const ShipMotion& motion() const
+  {
+    return motion_;
+  }
 
 private:
   Scenario scenario_;

@@ -32,9 +32,15 @@ public:
   OutputFile& operator=(const OutputFile&) = delete;
 
   /// The file the output is for.
-  const std::string& path() const { return path_; }
+  const std::string& path() const
+  {
+    return path_;
+  }
   /// Where to write it until commit().
-  const std::string& temporary() const { return temporary_; }
+  const std::string& temporary() const
+  {
+    return temporary_;
+  }
 
   /// Renames the temporary, written and closed by the caller, to path(). Throws
   /// std::runtime_error naming path() on failure (the temporary is then removed).
@@ -46,7 +52,7 @@ private:
   std::string path_;
   std::string target_;     ///< path_, or the file it names when it is a symbolic link
   std::string temporary_;  ///< next to target_; target_ itself for a device or a pipe
-  int slot_ = -1;  ///< registration for removal on a signal or at exit; -1 when none
+  int slot_ = -1;          ///< registration for removal on a signal or at exit; -1 when none
 };
 
 /// Writes `contents` to `path` through an OutputFile.
