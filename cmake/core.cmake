@@ -16,7 +16,9 @@ add_library(${PROJECT_NAME}_core
   src/core/paper_loop.cpp
   src/core/leveller.cpp
   src/core/turn_detector.cpp
-  src/core/calibration_window.cpp)
+  src/core/calibration_window.cpp
+  src/core/drift_observer.cpp
+  src/core/frequency_drift.cpp)
 target_include_directories(${PROJECT_NAME}_core PUBLIC include)
 target_link_libraries(${PROJECT_NAME}_core PUBLIC Eigen3::Eigen PkgConfig::FFTW3 yaml-cpp)
 
@@ -39,6 +41,8 @@ if(CATKIN_ENABLE_TESTING)
     test/core/test_leveller.cpp
     test/core/test_turn_detector.cpp
     test/core/test_calibration_window.cpp
+    test/core/test_drift_observer.cpp
+    test/core/test_frequency_drift.cpp
     test/core/test_real_world_streams.cpp)
   target_link_libraries(test_core ${PROJECT_NAME}_core)
   # test_real_world_streams reads ../shared/data beside the repository when it is there.

@@ -1,6 +1,8 @@
 #include "periodic_bias_compensation/core/compensator.h"
 #include "periodic_bias_compensation/core/broadband_wave.h"
 #include "periodic_bias_compensation/core/calibration_window.h"
+#include "periodic_bias_compensation/core/drift_observer.h"
+#include "periodic_bias_compensation/core/frequency_drift.h"
 #include "periodic_bias_compensation/core/harmonic_model.h"
 #include "periodic_bias_compensation/core/leveller.h"
 #include "periodic_bias_compensation/core/lever_arm.h"
@@ -20,20 +22,12 @@ namespace periodic_bias_compensation
 {
 namespace
 {
-/// FFT estimates used to measure the drift of the dominant frequency.
-constexpr std::size_t kFrequencyHistory = 20;
-/// Largest frequency drift believed [Hz/s].
-constexpr double kMaxFrequencySlope = 0.01;
-/// Largest relative change of the frequency extrapolated from the last FFT estimate [-].
-constexpr double kMaxExtrapolation = 0.15;
 /// Periods of a held lock the FFT window must span before an estimate 20 % away replaces it.
 constexpr double kResolvePeriods = 10.0;
 /// Time constant with which the model of a changed or lost lock fades out [s].
 constexpr double kFadeTime = 2.0;
 /// Weight below which a fading model is dropped [-].
 constexpr double kFadeEnd = 1e-3;
-/// Most Euler steps of the slow-motion observer per sample (stepDefault).
-constexpr int kMaxObserverSteps = 10000;
 /// Highest sample rate planned for [Hz]: a stamp step far below any IMU's period (a driver
 /// glitch) must not size FFT windows and tables for an absurd rate.
 constexpr double kMaxSampleRate = 10000.0;
@@ -153,12 +147,8 @@ struct AxisEstimator
   HarmonicEstimator previous;
   double previous_frequency = 0.0, previous_phase = 0.0, previous_weight = 0.0;
   double phase = 0.0;
-  /// Recent FFT estimates (window centre time [s], frequency [Hz]) for the drift of the period.
-  std::deque<std::pair<double, double>> frequency_history;
-  double frequency_slope = 0.0;  ///< [Hz/s]
-  double frequency_time = 0.0;   ///< centre time of the newest FFT window [s]
-  double slow_p = 0.0, slow_v = 0.0, bias = 0.0;
-  double bias_rate = 0.0;  ///< [m/s^3]
+  FrequencyDrift frequency_drift;  ///< of the FFT estimates, to extrapolate the lock to now
+  DriftObserver drift;             ///< default mode: the slow motion and the bias (paper mode: the bias)
   double residual_variance = 0.0;
   // Default mode with heave_filter: the broadband wave estimate and its share (broadbandWave).
   BroadbandWave broadband;
@@ -317,7 +307,7 @@ public:
     for (int i = 0; i < 3; ++i)
     {
       axes_[i] = AxisEstimator();
-      axes_[i].bias = constant_bias_[i];  // zero unless it came from a file
+      axes_[i].drift.setBias(constant_bias_[i]);  // zero unless it came from a file
     }
     resetMotion();
   }
@@ -378,7 +368,7 @@ public:
     bias_from_file_ = true;
     calibrated_ = true;
     for (int i = 0; i < 3; ++i)
-      axes_[i].bias = bias[i];
+      axes_[i].drift.setBias(bias[i]);
     return true;
   }
 
@@ -393,7 +383,7 @@ public:
   Vector3 constantBias() const
   {
     if (config_.mode == Mode::kDefault && calibrated_)
-      return Vector3(axes_[0].bias, axes_[1].bias, axes_[2].bias);
+      return Vector3(axes_[0].drift.bias(), axes_[1].drift.bias(), axes_[2].drift.bias());
     return constant_bias_;
   }
   Quaternion levelOrientation() const
@@ -497,10 +487,8 @@ private:
       axis.model_ready = false;
       axis.previous_weight = 0.0;
       axis.phase = 0.0;
-      axis.frequency_history.clear();
-      axis.frequency_slope = 0.0;
-      axis.slow_p = axis.slow_v = 0.0;
-      axis.bias_rate = 0.0;
+      axis.frequency_drift.clear();
+      axis.drift.restartMotion();
       axis.residual_variance = 0.0;
       axis.broadband = BroadbandWave(&axis == &axes_[2], config_.heave_corner_frequency, config_.min_frequency);
       axis.paper.reset();
@@ -542,7 +530,7 @@ private:
     }
     calibrated_ = true;
     for (int i = 0; i < 3; ++i)
-      axes_[i].bias = constant_bias_[i];
+      axes_[i].drift.setBias(constant_bias_[i]);
     if (config_.mode == Mode::kPaper)
     {
       const Vector3 drift = calibration_.constantPositionDrift(level, constant_bias_);
@@ -567,7 +555,7 @@ private:
     if (config_.mode == Mode::kDefault)
       for (int i = 0; i < 3; ++i)
       {
-        axes_[i].slow_p = axes_[i].slow_v = 0.0;
+        axes_[i].drift.restartPosition();
         out->position_filtered[i] = out->velocity_filtered[i] = 0.0;
       }
   }
@@ -587,7 +575,7 @@ private:
     {
       const Vector3 provisional = calibration_.provisionalBias(a);
       for (int i = 0; i < 3; ++i)
-        axes_[i].bias = provisional[i];
+        axes_[i].drift.setBias(provisional[i]);
     }
 
     ++since_analysis_;
@@ -598,8 +586,9 @@ private:
     for (int i = 0; i < 3; ++i)
     {
       AxisEstimator& axis = axes_[i];
-      const double bias =
-          config_.enable_constant ? (config_.mode == Mode::kPaper && calibrated_ ? constant_bias_[i] : axis.bias) : 0.0;
+      const double bias = config_.enable_constant
+                              ? (config_.mode == Mode::kPaper && calibrated_ ? constant_bias_[i] : axis.drift.bias())
+                              : 0.0;
       const double compensated = a[i] - bias;
       axis.time_since_reset += dt;
       if (axis.tracker)
@@ -679,51 +668,10 @@ private:
     axis.frequency = estimate.frequency;
     if (jump)
     {
-      axis.frequency_history.clear();
+      axis.frequency_drift.clear();
       startModel(axis);
     }
-    axis.frequency_time = now_ - 0.5 * span;
-    // Only full windows: while it fills, the interpolation bias changes with the data length and
-    // would read as a drift.
-    auto& history = axis.frequency_history;
-    if (!whole_span)
-      history.clear();
-    else
-      history.emplace_back(axis.frequency_time, axis.frequency);
-    if (history.size() > kFrequencyHistory)
-      history.pop_front();
-    axis.frequency_slope = 0.0;
-    if (history.size() >= 4)
-    {
-      double mt = 0.0, mf = 0.0;
-      for (const auto& [t, f] : history)
-      {
-        mt += t;
-        mf += f;
-      }
-      mt /= history.size();
-      mf /= history.size();
-      double stt = 0.0, stf = 0.0;
-      for (const auto& [t, f] : history)
-      {
-        stt += (t - mt) * (t - mt);
-        stf += (t - mt) * (f - mf);
-      }
-      if (stt > 0.0)
-      {
-        // Believed only when it stands out of the estimates' own scatter (3 standard errors).
-        // Windows one hop apart share most of their data, so their errors are correlated:
-        // the standard error is inflated by sqrt(window / hop), the overlap factor.
-        const double slope = stf / stt;
-        double sse = 0.0;
-        for (const auto& [t, f] : history)
-          sse += std::pow(f - mf - slope * (t - mt), 2);
-        const double overlap = std::sqrt(span / config_.fft_hop);
-        const double standard_error = overlap * std::sqrt(sse / (history.size() - 2) / stt);
-        if (std::abs(slope) > 3.0 * standard_error)
-          axis.frequency_slope = std::clamp(slope, -kMaxFrequencySlope, kMaxFrequencySlope);
-      }
-    }
+    axis.frequency_drift.add(now_, axis.frequency, span, whole_span, config_.fft_hop);
   }
 
   /// Default mode with heave_filter: the broadband wave estimate of axis i (BroadbandWave),
@@ -822,12 +770,8 @@ private:
     if (axis.locked && config_.enable_periodic)
     {
       // The FFT reports the frequency at the centre of its window; a drifting encounter
-      // frequency is extrapolated from there to now.
-      // Bounded: a noisy slope extrapolated over a long window must never take the frequency
-      // towards zero, where the displacement (divided by omega^2) would explode.
-      const double frequency = std::clamp(axis.frequency + axis.frequency_slope * (now_ - axis.frequency_time),
-                                          std::max(config_.min_frequency, (1.0 - kMaxExtrapolation) * axis.frequency),
-                                          (1.0 + kMaxExtrapolation) * axis.frequency);
+      // frequency is extrapolated from there to now (FrequencyDrift).
+      const double frequency = axis.frequency_drift.at(now_, axis.frequency, config_.min_frequency);
       const double omega = 2.0 * M_PI * frequency;
       axis.phase = std::fmod(axis.phase + omega * dt, 2.0 * M_PI);
       const double lambda = std::exp(-dt / config_.harmonic_memory);
@@ -861,51 +805,19 @@ private:
     if (config_.heave_filter && config_.enable_periodic)
       broadband = broadbandWave(axis, i, raw, residual, dt, &wave_a, &wave_x, &wave_v);
 
-    // Fourth-order observer, poles at -w (characteristic (s + w)^4): position, velocity, the
-    // bias and its rate. p / a = s^2 / (s + w)^4, so a constant bias and one that changes at a
-    // steady rate (a slow drift, a long-period wander between its turns) leave no position error.
-    const double w = 1.0 / config_.drift_time_constant;
-    const double k1 = 4.0 * w, k2 = 6.0 * w * w;
-    const double k3 = config_.enable_constant ? 4.0 * w * w * w : 0.0;
-    const double k4 = config_.enable_constant ? w * w * w * w : 0.0;
-    const double bias = config_.enable_constant ? axis.bias : 0.0;
-    // This Euler step of the observer is stable only while dt < 0.55 drift_time_constant: a longer
-    // step (a slow IMU, a short gap) is split into steps of at most a quarter of it (0.59 s
-    // samples with a 0.5 s constant grew the bias x7 per sample). Past kMaxObserverSteps the slow
-    // motion starts again, as after a gap.
-    const double split = std::ceil(w * dt / 0.1);
-    if (split > kMaxObserverSteps)
-    {
-      axis.slow_p = axis.slow_v = 0.0;
-    }
-    else
-    {
-      const int steps = std::max(1, static_cast<int>(split));
-      const double h = dt / steps;
-      for (int k = 0; k < steps; ++k)
-      {
-        axis.slow_v += (raw - wave_a - (config_.enable_constant ? axis.bias : 0.0) - k2 * axis.slow_p) * h;
-        axis.slow_p += (axis.slow_v - k1 * axis.slow_p) * h;
-        if (calibrated_ && config_.enable_constant)
-        {
-          axis.bias += (k3 * axis.slow_p + axis.bias_rate) * h;
-          axis.bias_rate += k4 * axis.slow_p * h;
-        }
-      }
-    }
-    axis.d_v = -(bias + k2 * axis.slow_p) * dt;
-    axis.d_p = -k1 * axis.slow_p * dt;
+    // The slow motion: what the wave model leaves, through the drift observer.
+    axis.drift.update(raw - wave_a, dt, config_.drift_time_constant, config_.enable_constant,
+                      calibrated_ && config_.enable_constant);
+    axis.d_v = axis.drift.velocityCorrection();
+    axis.d_p = axis.drift.positionCorrection();
 
-    out->position_filtered[i] = axis.slow_p;
-    out->velocity_filtered[i] = axis.slow_v - k1 * axis.slow_p;
+    out->position_filtered[i] = axis.drift.position();
+    out->velocity_filtered[i] = axis.drift.velocity();
     out->position_wave[i] = wave_x;
     out->velocity_wave[i] = wave_v;
     out->axes[i].periodic_bias = wave_a;
-    // White acceleration noise of one-sided density n^2 = 2 sigma^2 dt through the observer:
-    // var(p) = n^2 / (64 w^3), var(v) = 5 n^2 / (64 w) (closed forms for a quadruple pole at -w).
-    const double density = 2.0 * axis.residual_variance * (rate_ > 0.0 ? 1.0 / rate_ : 0.0);
-    out->position_variance[i] = density / (64.0 * w * w * w);
-    out->velocity_variance[i] = 5.0 * density / (64.0 * w);
+    DriftObserver::noiseVariances(axis.residual_variance, rate_, config_.drift_time_constant,
+                                  &out->position_variance[i], &out->velocity_variance[i]);
     // The blend's variance (broadbandWave), errors taken as independent.
     const double harmonic_share = (1.0 - broadband.weight) * (1.0 - broadband.weight);
     const double broadband_share = broadband.weight * broadband.weight;
