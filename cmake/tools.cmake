@@ -4,10 +4,16 @@
 add_library(${PROJECT_NAME}_tools src/tools/output_file.cpp)
 target_include_directories(${PROJECT_NAME}_tools PUBLIC include)
 
+# The accuracy of estimates against the simulator's truth (evaluate_compensator's tables), no ROS;
+# its median is the gap library's.
+add_library(${PROJECT_NAME}_metrics src/tools/metrics.cpp)
+target_include_directories(${PROJECT_NAME}_metrics PUBLIC include)
+target_link_libraries(${PROJECT_NAME}_metrics PUBLIC ${PROJECT_NAME}_core ${PROJECT_NAME}_sim ${PROJECT_NAME}_gap)
+
 # Offline tools on the cores (no ROS master); evaluate_compensator reads other estimators' bags.
 add_executable(evaluate_compensator src/tools/evaluate_compensator.cpp)
-target_link_libraries(evaluate_compensator ${PROJECT_NAME}_core ${PROJECT_NAME}_sim ${PROJECT_NAME}_tools
-  ${catkin_LIBRARIES})
+target_link_libraries(evaluate_compensator ${PROJECT_NAME}_metrics ${PROJECT_NAME}_core ${PROJECT_NAME}_sim
+  ${PROJECT_NAME}_tools ${catkin_LIBRARIES})
 
 # Speed benchmark of the core (Google Benchmark); run by scripts/bench.py, not a test.
 find_package(benchmark QUIET)
@@ -45,4 +51,7 @@ if(CATKIN_ENABLE_TESTING)
     PBC_EVALUATE_COMPENSATOR="$<TARGET_FILE:evaluate_compensator>"
     PBC_SOURCE_DIR="${CMAKE_CURRENT_SOURCE_DIR}")
   add_dependencies(test_command_line simulate_imu compensate_bag diagnose_gap validate_gap evaluate_compensator)
+  # The metrics on synthetic runs with known answers (no ROS, no simulator run).
+  catkin_add_gtest(test_metrics test/core/main.cpp test/tools/test_metrics.cpp)
+  target_link_libraries(test_metrics ${PROJECT_NAME}_metrics)
 endif()

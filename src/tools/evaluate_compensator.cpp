@@ -16,9 +16,7 @@
 #include <cstdio>
 #include <fstream>
 #include <iostream>
-#include <limits>
 #include <map>
-#include <memory>
 #include <optional>
 #include <sstream>
 #include <string>
@@ -33,9 +31,11 @@
 #include "periodic_bias_compensation/sim/core_sample.h"
 #include "periodic_bias_compensation/sim/simulator.h"
 #include "periodic_bias_compensation/tools/command_line.h"
+#include "periodic_bias_compensation/tools/metrics.h"
 #include "periodic_bias_compensation/tools/output_file.h"
 
 namespace pbc = periodic_bias_compensation;
+namespace metrics = periodic_bias_compensation::metrics;
 namespace sim = periodic_bias_compensation::sim;
 using pbc::Vector3;
 
@@ -130,177 +130,6 @@ constexpr double kStationRadius = 50.0;
 /// Seed of the training run that "paper tuned" is tuned on: never among the evaluated seeds 1..N.
 constexpr std::uint64_t kTrainingSeed = 1000;
 
-/// Errors of one method on one run, per axis.
-/// Elapsed times at which the slow-motion error is reported (60 s, 10 min, 30 min) [s].
-constexpr std::array<double, 3> kCheckpoints = { 60.0, 600.0, 1800.0 };
-
-struct Errors
-{
-  /// |filtered - true slow| at each of kCheckpoints [m]; NaN where the run is shorter.
-  std::array<Vector3, kCheckpoints.size()> slow_at{ Vector3::Constant(NAN), Vector3::Constant(NAN),
-                                                    Vector3::Constant(NAN) };
-  Vector3 slow_final = Vector3::Zero();               ///< |filtered - true slow| at the end [m]
-  Vector3 total_final = Vector3::Zero();              ///< |filtered + wave - true position| at the end [m]
-  Vector3 slow_rms = Vector3::Constant(NAN);          ///< RMS(filtered - true slow) after settling [m]
-  Vector3 total_rms = Vector3::Constant(NAN);         ///< RMS(filtered + wave - true position) after settling [m]
-  Vector3 wave_rms_percent = Vector3::Constant(NAN);  ///< RMS(wave - true wave) / RMS(true wave) [%]
-  /// RMS(wave - true wave) / significant wave height [%], Hs = 4 std(true wave) per axis (for z the
-  /// usual significant wave height of heave).
-  Vector3 wave_hs_percent = Vector3::Constant(NAN);
-};
-
-/// The metrics of every method: a method's slow and wave motion, sample by sample, against the
-/// truth (positions relative to the first sample's).
-class Scorer
-{
-public:
-  Scorer(const sim::Sample& first, double settle) : slow0_(first.truth.slow_position), settle_(settle)
-  {
-  }
-
-  void add(const sim::Sample& s, const Vector3& slow, const Vector3& wave)
-  {
-    // The first sample within 0.1 s before a checkpoint or after it (a 60 s run's last sample is
-    // one period short of 60 s).
-    for (std::size_t c = 0; c < kCheckpoints.size(); ++c)
-      if (!checkpoint_done_[c] && s.elapsed >= kCheckpoints[c] - 0.1)
-      {
-        checkpoint_done_[c] = true;
-        slow_at_[c] = (slow - (s.truth.slow_position - slow0_)).cwiseAbs();
-      }
-    if (s.elapsed < settle_)
-      return;
-    const Vector3 e = wave - s.truth.wave_position;
-    error2_ += e.cwiseProduct(e);
-    truth2_ += s.truth.wave_position.cwiseProduct(s.truth.wave_position);
-    truth_sum_ += s.truth.wave_position;
-    const Vector3 slow_error = slow - (s.truth.slow_position - slow0_);
-    const Vector3 total_error = slow + wave - (s.truth.position - slow0_);
-    slow2_ += slow_error.cwiseProduct(slow_error);
-    total2_ += total_error.cwiseProduct(total_error);
-    ++n_;
-  }
-
-  /// The errors, with the method's final slow and wave motion at the last sample.
-  Errors finish(const sim::Sample& last, const Vector3& slow, const Vector3& wave) const
-  {
-    Errors errors;
-    errors.slow_at = slow_at_;
-    errors.slow_final = (slow - (last.truth.slow_position - slow0_)).cwiseAbs();
-    errors.total_final = (slow + wave - (last.truth.position - slow0_)).cwiseAbs();
-    for (int i = 0; i < 3; ++i)
-      if (truth2_[i] > 0.0)
-        errors.wave_rms_percent[i] = 100.0 * std::sqrt(error2_[i] / truth2_[i]);
-    if (n_ > 0)
-    {
-      const Vector3 mean = truth_sum_ / n_;
-      for (int i = 0; i < 3; ++i)
-      {
-        const double truth_std = std::sqrt(std::max(0.0, truth2_[i] / n_ - mean[i] * mean[i]));
-        if (truth_std > 0.0)
-          errors.wave_hs_percent[i] = 100.0 * std::sqrt(error2_[i] / n_) / (4.0 * truth_std);
-      }
-      errors.slow_rms = (slow2_ / n_).cwiseSqrt();
-      errors.total_rms = (total2_ / n_).cwiseSqrt();
-    }
-    return errors;
-  }
-
-private:
-  Vector3 slow0_;
-  double settle_;
-  Vector3 error2_ = Vector3::Zero(), truth2_ = Vector3::Zero(), slow2_ = Vector3::Zero(), total2_ = Vector3::Zero();
-  Vector3 truth_sum_ = Vector3::Zero();
-  int n_ = 0;
-  std::array<bool, kCheckpoints.size()> checkpoint_done_{};
-  std::array<Vector3, kCheckpoints.size()> slow_at_{ Vector3::Constant(NAN), Vector3::Constant(NAN),
-                                                     Vector3::Constant(NAN) };
-};
-
-/// Period tracking of one run, per axis: the compensator's dominant frequency against the
-/// dominant frequency of the true wave acceleration over the same window (same FFT settings),
-/// compared at every FFT hop.
-struct PeriodErrors
-{
-  Vector3 lock_time = Vector3::Constant(NAN);       ///< elapsed time of the first lock [s]
-  Vector3 locked_percent = Vector3::Constant(NAN);  ///< hops locked after the first lock [%]
-  Vector3 error_median = Vector3::Constant(NAN);    ///< median |f - f_true| / f_true while locked [%]
-  Vector3 error_p95 = Vector3::Constant(NAN);       ///< 95th percentile of the same [%]
-};
-
-/// Value below which `share` of `values` lie (nearest rank); NaN for none.
-double percentile(std::vector<double> values, double share)
-{
-  if (values.empty())
-    return NAN;
-  const std::size_t k = std::min(values.size() - 1, static_cast<std::size_t>(share * values.size()));
-  std::nth_element(values.begin(), values.begin() + k, values.end());
-  return values[k];
-}
-
-class PeriodScorer
-{
-public:
-  PeriodScorer(const pbc::CompensatorConfig& config, double rate) : config_(config)
-  {
-    const int window = std::max(16, static_cast<int>(std::lround(config.fft_window * rate)));
-    for (auto& tracker : truth_)
-      tracker = std::make_unique<pbc::FrequencyTracker>(window, rate);
-    hop_ = std::max(1, static_cast<int>(std::lround(config.fft_hop * rate)));
-    rate_ = rate;
-  }
-
-  void add(const sim::Sample& s, const pbc::CompensatorOutput& out)
-  {
-    for (int i = 0; i < 3; ++i)
-    {
-      truth_[i]->push(s.truth.wave_acceleration[i], s.t);
-      if (out.axes[i].locked && std::isnan(errors_.lock_time[i]))
-        errors_.lock_time[i] = s.elapsed;
-    }
-    if (++since_hop_ < hop_)
-      return;
-    since_hop_ = 0;
-    for (int i = 0; i < 3; ++i)
-    {
-      if (std::isnan(errors_.lock_time[i]))
-        continue;
-      ++hops_[i];
-      if (!out.axes[i].locked)
-        continue;
-      ++locked_[i];
-      // Over the same span the compensator used (analyseFreshest, same rule).
-      int span = 0;
-      const pbc::FrequencyEstimate truth = truth_[i]->analyseFreshest(
-          config_.min_frequency, config_.max_frequency, 1.0, static_cast<int>(pbc::kRecentFftWindow * rate_), &span);
-      if (truth.frequency > 0.0)
-        relative_[i].push_back(100.0 * std::abs(out.axes[i].frequency - truth.frequency) / truth.frequency);
-    }
-  }
-
-  PeriodErrors finish() const
-  {
-    PeriodErrors e = errors_;
-    for (int i = 0; i < 3; ++i)
-    {
-      if (hops_[i] > 0)
-        e.locked_percent[i] = 100.0 * locked_[i] / hops_[i];
-      e.error_median[i] = percentile(relative_[i], 0.5);
-      e.error_p95[i] = percentile(relative_[i], 0.95);
-    }
-    return e;
-  }
-
-private:
-  pbc::CompensatorConfig config_;
-  std::array<std::unique_ptr<pbc::FrequencyTracker>, 3> truth_;
-  int hop_ = 1, since_hop_ = 0;
-  double rate_ = 0.0;
-  std::array<int, 3> hops_{}, locked_{};
-  std::array<std::vector<double>, 3> relative_;
-  PeriodErrors errors_;
-};
-
 /// Whether the compensator is handed the IMU's orientation or has to level the samples itself.
 enum class Orientation
 {
@@ -309,16 +138,16 @@ enum class Orientation
 };
 
 /// One method's errors; `period`, if given, receives the period tracking of the run.
-Errors evaluate(const std::vector<sim::Sample>& samples, double rate, const pbc::CompensatorConfig& config,
-                const std::optional<Vector3>& bias, double settle, PeriodErrors* period = nullptr,
-                Orientation orientation = Orientation::kGiven)
+metrics::Errors evaluate(const std::vector<sim::Sample>& samples, double rate, const pbc::CompensatorConfig& config,
+                         const std::optional<Vector3>& bias, double settle, metrics::PeriodErrors* period = nullptr,
+                         Orientation orientation = Orientation::kGiven)
 {
   pbc::Compensator compensator(config);
   if (bias && !compensator.setConstantBias(*bias))
     throw std::runtime_error("the calibration scenario's constant bias is not finite or beyond " +
                              std::to_string(pbc::kMaxConstantBias) + " m/s^2");
-  Scorer scorer(samples.front(), settle);
-  PeriodScorer period_scorer(config, rate);
+  metrics::Scorer scorer(samples.front(), settle);
+  metrics::PeriodScorer period_scorer(config, rate);
   pbc::CompensatorOutput out;
   // Without the IMU's orientation nothing gives the heading (no magnetometer): the estimate's level
   // frame is turned once about z onto the truth's at the first sample, as Madgwick's is (bench).
@@ -344,66 +173,6 @@ Errors evaluate(const std::vector<sim::Sample>& samples, double rate, const pbc:
   if (period != nullptr)
     *period = period_scorer.finish();
   return scorer.finish(samples.back(), out.position_filtered, out.position_wave);
-}
-
-/// First-order high-pass filter (bilinear transform), one per axis.
-class HighPass
-{
-public:
-  HighPass(double cutoff, double rate)
-  {
-    const double k = std::tan(M_PI * cutoff / rate);
-    b_ = 1.0 / (1.0 + k);
-    a_ = (1.0 - k) / (1.0 + k);
-  }
-  Vector3 operator()(const Vector3& x)
-  {
-    y_ = b_ * (x - x_) + a_ * y_;
-    x_ = x;
-    return y_;
-  }
-
-private:
-  double b_, a_;
-  Vector3 x_ = Vector3::Zero(), y_ = Vector3::Zero();
-};
-
-/// The baseline of x-io's oscillatory motion tracking: gravity-free level acceleration high-passed,
-/// integrated, high-passed, integrated, high-passed (first-order, 0.1 Hz), run causally. Its one
-/// output is an oscillation about zero: compared as the wave motion, its slow motion is zero.
-Errors highPassBaseline(const std::vector<sim::Sample>& samples, double gravity, double settle)
-{
-  const double rate = (samples.size() - 1) / (samples.back().stamp - samples.front().stamp);
-  HighPass hp_a(0.1, rate), hp_v(0.1, rate), hp_p(0.1, rate);
-  Vector3 v = Vector3::Zero(), p = Vector3::Zero();
-  Scorer scorer(samples.front(), settle);
-  Vector3 position = Vector3::Zero();
-  for (std::size_t k = 1; k < samples.size(); ++k)
-  {
-    const sim::Sample& s = samples[k];
-    const double dt = s.stamp - samples[k - 1].stamp;
-    v += hp_a(s.orientation * s.accel - Vector3(0, 0, gravity)) * dt;
-    p += hp_v(v) * dt;
-    position = hp_p(p);
-    scorer.add(s, Vector3::Zero(), position);
-  }
-  return scorer.finish(samples.back(), Vector3::Zero(), position);
-}
-
-/// Plain double integration of the level, gravity-free acceleration (no compensation).
-Errors integrateRaw(const std::vector<sim::Sample>& samples, double gravity)
-{
-  // Its position is slow and wave motion at once: scored at the checkpoints and the end only.
-  Scorer scorer(samples.front(), std::numeric_limits<double>::infinity());
-  Vector3 v = Vector3::Zero(), p = Vector3::Zero();
-  for (std::size_t k = 1; k < samples.size(); ++k)
-  {
-    const double dt = samples[k].stamp - samples[k - 1].stamp;
-    v += (samples[k].orientation * samples[k].accel - Vector3(0, 0, gravity)) * dt;
-    p += v * dt;
-    scorer.add(samples[k], p, Vector3::Zero());
-  }
-  return scorer.finish(samples.back(), p, Vector3::Zero());
 }
 
 /// Positions of one odometry topic of a bag (recorded with or without a leading slash), in stamp order.
@@ -449,7 +218,7 @@ Track readTrack(const rosbag::Bag& bag, const std::string& topic)
 
 /// Another estimator's odometry for this run (slow motion on odometry/filtered, wave motion on
 /// odometry/wave if the bag has it), scored like the methods above.
-Errors scoreEstimate(const std::vector<sim::Sample>& samples, const std::string& path, double settle)
+metrics::Errors scoreEstimate(const std::vector<sim::Sample>& samples, const std::string& path, double settle)
 {
   rosbag::Bag bag(path, rosbag::bagmode::Read);
   const Track slow = readTrack(bag, "odometry/filtered");
@@ -463,7 +232,7 @@ Errors scoreEstimate(const std::vector<sim::Sample>& samples, const std::string&
                              std::to_string(slow.t.back()) + " s, the scenario " + std::to_string(start) + ".." +
                              std::to_string(end) + " s");
   auto waveAt = [&](double t) { return wave.t.empty() ? Vector3::Zero() : Vector3(wave.at(t)); };
-  Scorer scorer(samples.front(), settle);
+  metrics::Scorer scorer(samples.front(), settle);
   for (const auto& s : samples)
     scorer.add(s, slow.at(s.stamp), waveAt(s.stamp));
   return scorer.finish(samples.back(), slow.at(end), waveAt(end));
@@ -489,16 +258,6 @@ std::string seedPath(std::string pattern, int seed)
   for (auto at = pattern.find(key); at != std::string::npos; at = pattern.find(key))
     pattern.replace(at, key.size(), std::to_string(seed));
   return pattern;
-}
-
-double median(std::vector<double> values)
-{
-  values.erase(std::remove_if(values.begin(), values.end(), [](double v) { return !std::isfinite(v); }), values.end());
-  if (values.empty())
-    return NAN;
-  std::sort(values.begin(), values.end());
-  const std::size_t n = values.size();
-  return n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
 }
 
 std::string format(double value, const char* spec)
@@ -614,8 +373,8 @@ std::vector<std::string> methodNames(const Options& options, bool holds_station)
 /// Per method, its errors of each seed; the default mode's period tracking of each seed.
 struct Results
 {
-  std::map<std::string, std::vector<Errors>> errors;
-  std::vector<PeriodErrors> periods;
+  std::map<std::string, std::vector<metrics::Errors>> errors;
+  std::vector<metrics::PeriodErrors> periods;
 };
 
 /// Simulates one seed and scores every method on it.
@@ -623,7 +382,7 @@ void runSeed(const Setup& setup, const Options& options, int seed, Results* resu
 {
   const sim::Scenario& scenario = setup.scenario;
   const std::optional<Vector3>& calibrated_bias = setup.calibrated_bias;
-  std::map<std::string, std::vector<Errors>>& errors = results->errors;
+  std::map<std::string, std::vector<metrics::Errors>>& errors = results->errors;
   const auto samples = simulate(scenario, static_cast<std::uint64_t>(seed));
   if (samples.size() < 16)
     throw std::runtime_error("scenario produced too few samples");
@@ -631,8 +390,8 @@ void runSeed(const Setup& setup, const Options& options, int seed, Results* resu
   constant.enable_periodic = false;
   pbc::CompensatorConfig ours;
   ours.lever_arm = installedLeverArm(scenario);
-  errors["raw"].push_back(integrateRaw(samples, pbc::kStandardGravity));
-  errors["highpass"].push_back(highPassBaseline(samples, pbc::kStandardGravity, options.settle));
+  errors["raw"].push_back(metrics::integrateRaw(samples, pbc::kStandardGravity));
+  errors["highpass"].push_back(metrics::highPassBaseline(samples, pbc::kStandardGravity, options.settle));
   errors["constant"].push_back(evaluate(samples, scenario.rate, constant, calibrated_bias, options.settle));
   errors["paper"].push_back(evaluate(samples, scenario.rate, setup.paper.paper, calibrated_bias, options.settle));
   if (setup.paper.holds_station)
@@ -665,7 +424,7 @@ void runSeed(const Setup& setup, const Options& options, int seed, Results* resu
 /// The error table, per method and axis the medians over seeds; `csv`, if open, receives every
 /// seed's values.
 std::string errorTable(const std::vector<std::string>& methods,
-                       const std::map<std::string, std::vector<Errors>>& errors, std::ofstream* csv)
+                       const std::map<std::string, std::vector<metrics::Errors>>& errors, std::ofstream* csv)
 {
   std::ostringstream table;
   table << "| method | axis | slow-motion error at 60 s [m] | at 10 min [m] | at 30 min [m] | at end [m] "
@@ -681,10 +440,10 @@ std::string errorTable(const std::vector<std::string>& methods,
     {
       // Columns in table order; each holds one value per seed.
       std::array<std::vector<double>, 9> columns;
-      const std::vector<Errors>& runs = errors.at(method);
+      const std::vector<metrics::Errors>& runs = errors.at(method);
       for (std::size_t k = 0; k < runs.size(); ++k)
       {
-        const Errors& e = runs[k];
+        const metrics::Errors& e = runs[k];
         const std::array<double, 9> row = { e.slow_at[0][i], e.slow_at[1][i],       e.slow_at[2][i],
                                             e.slow_final[i], e.slow_rms[i],         e.total_final[i],
                                             e.total_rms[i],  e.wave_rms_percent[i], e.wave_hs_percent[i] };
@@ -701,14 +460,14 @@ std::string errorTable(const std::vector<std::string>& methods,
       }
       table << "| " << method << " | " << axes[i];
       for (std::size_t c = 0; c < columns.size(); ++c)
-        table << " | " << format(median(columns[c]), c < 7 ? "%.4f" : (c == 7 ? "%.1f" : "%.2f"));
+        table << " | " << format(metrics::median(columns[c]), c < 7 ? "%.4f" : (c == 7 ? "%.1f" : "%.2f"));
       table << " |\n";
     }
   return table.str();
 }
 
 /// Period tracking of the default mode (the paper mode uses the same tracker), medians over seeds.
-std::string periodTable(const std::vector<PeriodErrors>& periods)
+std::string periodTable(const std::vector<metrics::PeriodErrors>& periods)
 {
   std::ostringstream table;
   table << "\nPeriod tracking (default mode), medians over seeds:\n\n"
@@ -719,17 +478,18 @@ std::string periodTable(const std::vector<PeriodErrors>& periods)
   {
     std::array<std::vector<double>, 4> columns;
     int never = 0;
-    for (const PeriodErrors& p : periods)
+    for (const metrics::PeriodErrors& p : periods)
     {
       never += std::isnan(p.lock_time[i]) ? 1 : 0;
       const std::array<double, 4> row = { p.lock_time[i], p.locked_percent[i], p.error_median[i], p.error_p95[i] };
       for (std::size_t c = 0; c < row.size(); ++c)
         columns[c].push_back(row[c]);
     }
-    table << "| " << axes[i] << " | " << format(median(columns[0]), "%.1f")
+    table << "| " << axes[i] << " | " << format(metrics::median(columns[0]), "%.1f")
           << (never > 0 ? " (never in " + std::to_string(never) + " of " + std::to_string(periods.size()) + ")" : "")
-          << " | " << format(median(columns[1]), "%.0f") << " | " << format(median(columns[2]), "%.2f") << " | "
-          << format(median(columns[3]), "%.2f") << " |\n";
+          << " | " << format(metrics::median(columns[1]), "%.0f") << " | "
+          << format(metrics::median(columns[2]), "%.2f") << " | " << format(metrics::median(columns[3]), "%.2f")
+          << " |\n";
   }
   return table.str();
 }

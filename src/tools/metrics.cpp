@@ -1,0 +1,171 @@
+#include "periodic_bias_compensation/tools/metrics.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "periodic_bias_compensation/gap/gap.h"
+
+namespace periodic_bias_compensation::metrics
+{
+Scorer::Scorer(const sim::Sample& first, double settle) : slow0_(first.truth.slow_position), settle_(settle)
+{
+}
+
+void Scorer::add(const sim::Sample& s, const Vector3& slow, const Vector3& wave)
+{
+  for (std::size_t c = 0; c < kCheckpoints.size(); ++c)
+    if (!checkpoint_done_[c] && s.elapsed >= kCheckpoints[c] - 0.1)
+    {
+      checkpoint_done_[c] = true;
+      slow_at_[c] = (slow - (s.truth.slow_position - slow0_)).cwiseAbs();
+    }
+  if (s.elapsed < settle_)
+    return;
+  const Vector3 e = wave - s.truth.wave_position;
+  error2_ += e.cwiseProduct(e);
+  truth2_ += s.truth.wave_position.cwiseProduct(s.truth.wave_position);
+  truth_sum_ += s.truth.wave_position;
+  const Vector3 slow_error = slow - (s.truth.slow_position - slow0_);
+  const Vector3 total_error = slow + wave - (s.truth.position - slow0_);
+  slow2_ += slow_error.cwiseProduct(slow_error);
+  total2_ += total_error.cwiseProduct(total_error);
+  ++n_;
+}
+
+Errors Scorer::finish(const sim::Sample& last, const Vector3& slow, const Vector3& wave) const
+{
+  Errors errors;
+  errors.slow_at = slow_at_;
+  errors.slow_final = (slow - (last.truth.slow_position - slow0_)).cwiseAbs();
+  errors.total_final = (slow + wave - (last.truth.position - slow0_)).cwiseAbs();
+  for (int i = 0; i < 3; ++i)
+    if (truth2_[i] > 0.0)
+      errors.wave_rms_percent[i] = 100.0 * std::sqrt(error2_[i] / truth2_[i]);
+  if (n_ > 0)
+  {
+    const Vector3 mean = truth_sum_ / n_;
+    for (int i = 0; i < 3; ++i)
+    {
+      const double truth_std = std::sqrt(std::max(0.0, truth2_[i] / n_ - mean[i] * mean[i]));
+      if (truth_std > 0.0)
+        errors.wave_hs_percent[i] = 100.0 * std::sqrt(error2_[i] / n_) / (4.0 * truth_std);
+    }
+    errors.slow_rms = (slow2_ / n_).cwiseSqrt();
+    errors.total_rms = (total2_ / n_).cwiseSqrt();
+  }
+  return errors;
+}
+
+PeriodScorer::PeriodScorer(const CompensatorConfig& config, double rate) : config_(config)
+{
+  const int window = std::max(16, static_cast<int>(std::lround(config.fft_window * rate)));
+  for (auto& tracker : truth_)
+    tracker = std::make_unique<FrequencyTracker>(window, rate);
+  hop_ = std::max(1, static_cast<int>(std::lround(config.fft_hop * rate)));
+  rate_ = rate;
+}
+
+void PeriodScorer::add(const sim::Sample& s, const CompensatorOutput& out)
+{
+  for (int i = 0; i < 3; ++i)
+  {
+    truth_[i]->push(s.truth.wave_acceleration[i], s.t);
+    if (out.axes[i].locked && std::isnan(errors_.lock_time[i]))
+      errors_.lock_time[i] = s.elapsed;
+  }
+  if (++since_hop_ < hop_)
+    return;
+  since_hop_ = 0;
+  for (int i = 0; i < 3; ++i)
+  {
+    if (std::isnan(errors_.lock_time[i]))
+      continue;
+    ++hops_[i];
+    if (!out.axes[i].locked)
+      continue;
+    ++locked_[i];
+    // Over the same span the compensator used (analyseFreshest, same rule).
+    int span = 0;
+    const FrequencyEstimate truth = truth_[i]->analyseFreshest(config_.min_frequency, config_.max_frequency, 1.0,
+                                                               static_cast<int>(kRecentFftWindow * rate_), &span);
+    if (truth.frequency > 0.0)
+      relative_[i].push_back(100.0 * std::abs(out.axes[i].frequency - truth.frequency) / truth.frequency);
+  }
+}
+
+PeriodErrors PeriodScorer::finish() const
+{
+  PeriodErrors e = errors_;
+  for (int i = 0; i < 3; ++i)
+  {
+    if (hops_[i] > 0)
+      e.locked_percent[i] = 100.0 * locked_[i] / hops_[i];
+    e.error_median[i] = percentile(relative_[i], 0.5);
+    e.error_p95[i] = percentile(relative_[i], 0.95);
+  }
+  return e;
+}
+
+HighPass::HighPass(double cutoff, double rate)
+{
+  const double k = std::tan(M_PI * cutoff / rate);
+  b_ = 1.0 / (1.0 + k);
+  a_ = (1.0 - k) / (1.0 + k);
+}
+
+Vector3 HighPass::operator()(const Vector3& x)
+{
+  y_ = b_ * (x - x_) + a_ * y_;
+  x_ = x;
+  return y_;
+}
+
+Errors highPassBaseline(const std::vector<sim::Sample>& samples, double gravity, double settle)
+{
+  const double rate = (samples.size() - 1) / (samples.back().stamp - samples.front().stamp);
+  HighPass hp_a(0.1, rate), hp_v(0.1, rate), hp_p(0.1, rate);
+  Vector3 v = Vector3::Zero(), p = Vector3::Zero();
+  Scorer scorer(samples.front(), settle);
+  Vector3 position = Vector3::Zero();
+  for (std::size_t k = 1; k < samples.size(); ++k)
+  {
+    const sim::Sample& s = samples[k];
+    const double dt = s.stamp - samples[k - 1].stamp;
+    v += hp_a(s.orientation * s.accel - Vector3(0, 0, gravity)) * dt;
+    p += hp_v(v) * dt;
+    position = hp_p(p);
+    scorer.add(s, Vector3::Zero(), position);
+  }
+  return scorer.finish(samples.back(), Vector3::Zero(), position);
+}
+
+Errors integrateRaw(const std::vector<sim::Sample>& samples, double gravity)
+{
+  Scorer scorer(samples.front(), std::numeric_limits<double>::infinity());
+  Vector3 v = Vector3::Zero(), p = Vector3::Zero();
+  for (std::size_t k = 1; k < samples.size(); ++k)
+  {
+    const double dt = samples[k].stamp - samples[k - 1].stamp;
+    v += (samples[k].orientation * samples[k].accel - Vector3(0, 0, gravity)) * dt;
+    p += v * dt;
+    scorer.add(samples[k], p, Vector3::Zero());
+  }
+  return scorer.finish(samples.back(), p, Vector3::Zero());
+}
+
+double percentile(std::vector<double> values, double share)
+{
+  if (values.empty())
+    return NAN;
+  const std::size_t k = std::min(values.size() - 1, static_cast<std::size_t>(share * values.size()));
+  std::nth_element(values.begin(), values.begin() + k, values.end());
+  return values[k];
+}
+
+double median(std::vector<double> values)
+{
+  values.erase(std::remove_if(values.begin(), values.end(), [](double v) { return !std::isfinite(v); }), values.end());
+  return gap::median(std::move(values));
+}
+}  // namespace periodic_bias_compensation::metrics
