@@ -482,16 +482,12 @@ def spectral_displacement(t, accel, quat, band):
     spectrum = np.fft.rfft(a * taper[:, None], axis=0)
     f = np.fft.rfftfreq(n, dt)
     low, high = band
+    inside = (f > 0.7 * low) & (f < 1.3 * high)
+    rising = 0.5 - 0.5 * np.cos(np.pi * (f - 0.7 * low) / (0.6 * low))
+    falling = 0.5 + 0.5 * np.cos(np.pi * (f - 0.7 * high) / (0.6 * high))
+    w = np.where(f < 1.3 * low, rising, np.where(f > 0.7 * high, falling, 1.0))
     gain = np.zeros_like(f)
-    for i, fi in enumerate(f):
-        if fi <= 0.7 * low or fi >= 1.3 * high:
-            continue
-        w = 1.0
-        if fi < 1.3 * low:
-            w = 0.5 - 0.5 * math.cos(math.pi * (fi - 0.7 * low) / (0.6 * low))
-        elif fi > 0.7 * high:
-            w = 0.5 + 0.5 * math.cos(math.pi * (fi - 0.7 * high) / (0.6 * high))
-        gain[i] = -w / (2 * math.pi * fi) ** 2
+    gain[inside] = -w[inside] / (2 * np.pi * f[inside]) ** 2
     return grid, np.fft.irfft(spectrum * gain[:, None], n=n, axis=0)
 
 
