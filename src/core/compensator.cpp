@@ -8,6 +8,7 @@
 #include "periodic_bias_compensation/core/lever_arm.h"
 #include "periodic_bias_compensation/core/paper_loop.h"
 #include "periodic_bias_compensation/core/parameter_table.h"
+#include "periodic_bias_compensation/core/periodic_wave.h"
 #include "periodic_bias_compensation/core/turn_detector.h"
 
 #include <algorithm>
@@ -24,10 +25,6 @@ namespace
 {
 /// Periods of a held lock the FFT window must span before an estimate 20 % away replaces it.
 constexpr double kResolvePeriods = 10.0;
-/// Time constant with which the model of a changed or lost lock fades out [s].
-constexpr double kFadeTime = 2.0;
-/// Weight below which a fading model is dropped [-].
-constexpr double kFadeEnd = 1e-3;
 /// Highest sample rate planned for [Hz]: a stamp step far below any IMU's period (a driver
 /// glitch) must not size FFT windows and tables for an absurd rate.
 constexpr double kMaxSampleRate = 10000.0;
@@ -140,20 +137,13 @@ struct AxisEstimator
   bool locked = false;
   double frequency = 0.0;
 
-  // Default mode: harmonic tracker + fourth-order drift observer.
-  HarmonicEstimator harmonic;
-  bool model_ready = false;  ///< harmonic has described a period: its output is used
-  // The model of a lock that changed or was lost, fading out (retireModel).
-  HarmonicEstimator previous;
-  double previous_frequency = 0.0, previous_phase = 0.0, previous_weight = 0.0;
-  double phase = 0.0;
+  // Default mode: the periodic model over the lock's life + the fourth-order drift observer.
+  PeriodicWave wave;
   FrequencyDrift frequency_drift;  ///< of the FFT estimates, to extrapolate the lock to now
   DriftObserver drift;             ///< default mode: the slow motion and the bias (paper mode: the bias)
   double residual_variance = 0.0;
   // Default mode with heave_filter: the broadband wave estimate and its share (broadbandWave).
   BroadbandWave broadband;
-
-  SignalHistory raw_history;  ///< default mode: the harmonic model's input over the longest period
 
   // Paper mode: Eq. 2-7 (stepPaper).
   PaperLoop paper;
@@ -467,7 +457,7 @@ private:
       axis.locked = false;
       axis.frequency = 0.0;
       axis.paper.setCapacity(table);
-      axis.raw_history = SignalHistory(table);
+      axis.wave.setCapacity(table);
     }
     hop_samples_ = std::max(1, static_cast<int>(std::lround(config_.fft_hop * rate)));
     since_analysis_ = 0;
@@ -483,17 +473,13 @@ private:
         axis.tracker->clear();
       axis.locked = false;
       axis.frequency = 0.0;
-      axis.harmonic.reset(config_.harmonics);
-      axis.model_ready = false;
-      axis.previous_weight = 0.0;
-      axis.phase = 0.0;
+      axis.wave.reset(config_.harmonics);
       axis.frequency_drift.clear();
       axis.drift.restartMotion();
       axis.residual_variance = 0.0;
       axis.broadband = BroadbandWave(&axis == &axes_[2], config_.heave_corner_frequency, config_.min_frequency);
       axis.paper.reset();
       axis.d_v = axis.d_p = 0.0;
-      axis.raw_history.clear();
       axis.time_since_reset = 0.0;
     }
     since_analysis_ = 0;
@@ -654,7 +640,7 @@ private:
       // cannot disprove it yet.
       const bool too_short = axis.locked && axis.tracker->samples() < 3.0 * rate_ / axis.frequency;
       if (axis.locked && !too_short)
-        retireModel(axis);
+        axis.wave.retire(axis.frequency);
       axis.locked = axis.locked && too_short;
       return;
     }
@@ -669,7 +655,8 @@ private:
     if (jump)
     {
       axis.frequency_drift.clear();
-      startModel(axis);
+      axis.wave.start(axis.frequency, rate_, config_.harmonic_memory, config_.harmonics,
+                      config_.mode == Mode::kDefault);
     }
     axis.frequency_drift.add(now_, axis.frequency, span, whole_span, config_.fft_hop);
   }
@@ -706,59 +693,6 @@ private:
     return raw - (calibrated_ ? constant_bias_[i] : 0.0);
   }
 
-  /// A new lock (or one that moved): the harmonic model starts over at the new frequency, fitted
-  /// at once to its input over the last period (or harmonic_memory, if longer) where that is kept,
-  /// so it describes the wave from the next sample on; the slow channel then never takes a period
-  /// of wave while the model fills.
-  void startModel(AxisEstimator& axis)
-  {
-    retireModel(axis);
-    axis.harmonic.reset(config_.harmonics);
-    axis.phase = 0.0;
-    if (config_.mode != Mode::kDefault || rate_ <= 0.0)
-      return;
-    const double step = 2.0 * M_PI * axis.frequency / rate_;
-    const double lambda = std::exp(-1.0 / (rate_ * config_.harmonic_memory));
-    const int period = static_cast<int>(std::ceil(rate_ / axis.frequency));
-    const int count =
-        std::min(axis.raw_history.size(), std::max(period, static_cast<int>(rate_ * config_.harmonic_memory)));
-    // The newest kept sample (lag 1) is the previous one, at phase 0.
-    for (int lag = count; lag >= 1; --lag)
-      axis.harmonic.update(-(lag - 1) * step, axis.raw_history.ago(lag), lambda);
-  }
-
-  /// A lock that changes or is lost fades its model out rather than dropping it: the model is
-  /// kept, extrapolated at its own frequency, and its weight decays with kFadeTime from the
-  /// change on (not longer: on a broad sea the extrapolation soon loses the wave's phase). The
-  /// wave output never steps.
-  static void retireModel(AxisEstimator& axis)
-  {
-    if (!axis.model_ready)
-      return;
-    axis.previous = axis.harmonic;
-    axis.previous_frequency = axis.frequency;
-    axis.previous_phase = axis.phase;
-    axis.previous_weight = 1.0;
-    axis.model_ready = false;
-  }
-
-  void fadePreviousModel(AxisEstimator& axis, double dt, double* wave_a, double* wave_x, double* wave_v)
-  {
-    if (axis.previous_weight <= 0.0)
-      return;
-    const double omega = 2.0 * M_PI * axis.previous_frequency;
-    axis.previous_phase = std::fmod(axis.previous_phase + omega * dt, 2.0 * M_PI);
-    double a = 0.0, x = 0.0, v = 0.0, unused = 0.0, unused_too = 0.0;
-    axis.previous.evaluate(axis.previous_phase, omega, &a, &x, &v, &unused, &unused_too);
-    const double weight = axis.previous_weight;
-    *wave_a = weight * a + (1.0 - weight) * *wave_a;
-    *wave_x = weight * x + (1.0 - weight) * *wave_x;
-    *wave_v = weight * v + (1.0 - weight) * *wave_v;
-    axis.previous_weight *= std::exp(-dt / kFadeTime);
-    if (axis.previous_weight < kFadeEnd)
-      axis.previous_weight = 0.0;
-  }
-
   /// Default mode: the periodic acceleration is tracked by a harmonic estimator at the tracked
   /// frequency (its displacement is obtained in closed form, drift free); what is left feeds a
   /// fourth-order observer whose position is pulled to zero mean with time constant
@@ -772,34 +706,30 @@ private:
       // The FFT reports the frequency at the centre of its window; a drifting encounter
       // frequency is extrapolated from there to now (FrequencyDrift).
       const double frequency = axis.frequency_drift.at(now_, axis.frequency, config_.min_frequency);
-      const double omega = 2.0 * M_PI * frequency;
-      axis.phase = std::fmod(axis.phase + omega * dt, 2.0 * M_PI);
-      const double lambda = std::exp(-dt / config_.harmonic_memory);
       // Fitted to the acceleration less the calibrated offset, not less the drift observer's
       // moving bias: the model's own constant follows slow bias, and the observer's bias, which
       // follows acceleration up to about 1 / (2 pi drift_time_constant), stays out of its residual.
-      residual = axis.harmonic.update(axis.phase, offsetFree(raw, i), lambda);
-      axis.raw_history.push(offsetFree(raw, i));
-      const double beta = 1.0 - lambda;
+      const PeriodicWaveOutput model =
+          axis.wave.update(offsetFree(raw, i), frequency, dt, rate_, config_.harmonic_memory);
+      residual = model.residual;
+      const double beta = 1.0 - std::exp(-dt / config_.harmonic_memory);
       axis.residual_variance = (1.0 - beta) * axis.residual_variance + beta * residual * residual;
-      // A fit of less than one period is not yet a description of the oscillation.
-      if (axis.harmonic.updates() >= rate_ / frequency)
-      {
-        axis.harmonic.evaluate(axis.phase, omega, &wave_a, &wave_x, &wave_v, &variance_factor,
-                               &velocity_variance_factor);
-        axis.model_ready = true;
-      }
+      wave_a = model.acceleration;
+      wave_x = model.position;
+      wave_v = model.velocity;
+      variance_factor = model.position_variance_factor;
+      velocity_variance_factor = model.velocity_variance_factor;
     }
     else
     {
-      axis.raw_history.push(offsetFree(raw, i));
+      axis.wave.push(offsetFree(raw, i));
       if (dt > 0.0)
       {
         const double beta = 1.0 - std::exp(-dt / config_.harmonic_memory);
         axis.residual_variance = (1.0 - beta) * axis.residual_variance + beta * compensated * compensated;
       }
     }
-    fadePreviousModel(axis, dt, &wave_a, &wave_x, &wave_v);
+    axis.wave.fade(dt, &wave_a, &wave_x, &wave_v);
 
     BroadbandWaveOutput broadband;
     if (config_.heave_filter && config_.enable_periodic)

@@ -1,0 +1,77 @@
+#include "periodic_bias_compensation/core/periodic_wave.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace periodic_bias_compensation
+{
+void PeriodicWave::reset(int harmonics)
+{
+  model_.reset(harmonics);
+  ready_ = false;
+  previous_weight_ = 0.0;
+  phase_ = 0.0;
+  history_.clear();
+}
+
+void PeriodicWave::start(double frequency, double rate, double memory, int harmonics, bool fit_history)
+{
+  retire(frequency);
+  model_.reset(harmonics);
+  phase_ = 0.0;
+  if (!fit_history || rate <= 0.0)
+    return;
+  const double step = 2.0 * M_PI * frequency / rate;
+  const double lambda = std::exp(-1.0 / (rate * memory));
+  const int period = static_cast<int>(std::ceil(rate / frequency));
+  const int count = std::min(history_.size(), std::max(period, static_cast<int>(rate * memory)));
+  // The newest kept sample (lag 1) is the previous one, at phase 0.
+  for (int lag = count; lag >= 1; --lag)
+    model_.update(-(lag - 1) * step, history_.ago(lag), lambda);
+}
+
+void PeriodicWave::retire(double frequency)
+{
+  if (!ready_)
+    return;
+  previous_ = model_;
+  previous_frequency_ = frequency;
+  previous_phase_ = phase_;
+  previous_weight_ = 1.0;
+  ready_ = false;
+}
+
+PeriodicWaveOutput PeriodicWave::update(double value, double frequency, double dt, double rate, double memory)
+{
+  PeriodicWaveOutput out;
+  const double omega = 2.0 * M_PI * frequency;
+  phase_ = std::fmod(phase_ + omega * dt, 2.0 * M_PI);
+  out.residual = model_.update(phase_, value, std::exp(-dt / memory));
+  history_.push(value);
+  // A fit of less than one period is not yet a description of the oscillation.
+  if (model_.updates() >= rate / frequency)
+  {
+    model_.evaluate(phase_, omega, &out.acceleration, &out.position, &out.velocity, &out.position_variance_factor,
+                    &out.velocity_variance_factor);
+    ready_ = out.ready = true;
+  }
+  return out;
+}
+
+void PeriodicWave::fade(double dt, double* acceleration, double* position, double* velocity)
+{
+  if (previous_weight_ <= 0.0)
+    return;
+  const double omega = 2.0 * M_PI * previous_frequency_;
+  previous_phase_ = std::fmod(previous_phase_ + omega * dt, 2.0 * M_PI);
+  double a = 0.0, x = 0.0, v = 0.0, unused = 0.0, unused_too = 0.0;
+  previous_.evaluate(previous_phase_, omega, &a, &x, &v, &unused, &unused_too);
+  const double weight = previous_weight_;
+  *acceleration = weight * a + (1.0 - weight) * *acceleration;
+  *position = weight * x + (1.0 - weight) * *position;
+  *velocity = weight * v + (1.0 - weight) * *velocity;
+  previous_weight_ *= std::exp(-dt / kFadeTime);
+  if (previous_weight_ < kFadeEnd)
+    previous_weight_ = 0.0;
+}
+}  // namespace periodic_bias_compensation

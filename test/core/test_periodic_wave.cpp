@@ -1,0 +1,110 @@
+// PeriodicWave: a lock's model describes the wave after a period, at once when started from its
+// history, and a changed or lost lock's model fades out without a step.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "periodic_bias_compensation/core/periodic_wave.h"
+
+namespace periodic_bias_compensation
+{
+namespace
+{
+constexpr double kRate = 50.0, kFrequency = 0.125, kAmplitude = 0.8, kMemory = 3.0;
+constexpr double kOmega = 2.0 * M_PI * kFrequency;
+
+double acceleration(double t)
+{
+  return kAmplitude * std::sin(kOmega * t + 0.4);
+}
+double displacement(double t)
+{
+  return -acceleration(t) / (kOmega * kOmega);
+}
+}  // namespace
+
+// Locked from the first sample: nothing is claimed before a period; after two, the displacement
+// is the wave's to within 1 % of its amplitude.
+TEST(PeriodicWave, DescribesTheWaveAfterAPeriod)
+{
+  PeriodicWave wave;
+  wave.setCapacity(1000);
+  wave.reset(1);
+  wave.start(kFrequency, kRate, kMemory, 1, true);
+  const double dt = 1.0 / kRate;
+  double worst = 0.0;
+  for (int i = 0; i < static_cast<int>(3.0 * kRate / kFrequency); ++i)
+  {
+    const double t = i * dt;
+    const PeriodicWaveOutput out = wave.update(acceleration(t), kFrequency, i ? dt : 0.0, kRate, kMemory);
+    EXPECT_EQ(out.ready, i + 1 >= kRate / kFrequency) << i;
+    if (t > 2.0 / kFrequency)
+      worst = std::max(worst, std::abs(out.position - displacement(t)));
+  }
+  EXPECT_LT(worst, 0.01 * kAmplitude / (kOmega * kOmega));
+}
+
+// A lock found after 30 s of unlocked samples starts from their history: ready and right on the
+// first locked sample.
+TEST(PeriodicWave, StartsFromItsHistory)
+{
+  PeriodicWave wave;
+  wave.setCapacity(1000);
+  wave.reset(1);
+  const double dt = 1.0 / kRate;
+  int i = 0;
+  for (; i < static_cast<int>(30.0 * kRate); ++i)
+    wave.push(acceleration(i * dt));
+  wave.start(kFrequency, kRate, kMemory, 1, true);
+  const PeriodicWaveOutput out = wave.update(acceleration(i * dt), kFrequency, dt, kRate, kMemory);
+  ASSERT_TRUE(out.ready);
+  EXPECT_NEAR(out.position, displacement(i * dt), 0.01 * kAmplitude / (kOmega * kOmega));
+  EXPECT_NEAR(out.residual, 0.0, 0.01 * kAmplitude);
+}
+
+// A lost lock: its model, extrapolated, fades with kFadeTime into the estimate it is blended with
+// (here zero), without a step; gone once its weight is below kFadeEnd. A model that never saw a
+// period leaves nothing to fade.
+TEST(PeriodicWave, ALostLockFadesOut)
+{
+  PeriodicWave wave;
+  wave.setCapacity(1000);
+  wave.reset(1);
+  wave.start(kFrequency, kRate, kMemory, 1, true);
+  const double dt = 1.0 / kRate;
+  int i = 0;
+  double last = 0.0;
+  for (; i < static_cast<int>(20.0 * kRate); ++i)
+    last = wave.update(acceleration(i * dt), kFrequency, i ? dt : 0.0, kRate, kMemory).position;
+  wave.retire(kFrequency);
+  double a = 0.0, x = 0.0, v = 0.0;
+  wave.fade(dt, &a, &x, &v);
+  EXPECT_NEAR(x, last, 0.02 * kAmplitude / (kOmega * kOmega));  // no step
+  const double t_lost = i * dt;
+  for (++i; i < static_cast<int>(40.0 * kRate); ++i)
+  {
+    a = x = v = 0.0;
+    wave.fade(dt, &a, &x, &v);
+    const double t = i * dt;
+    const double weight = std::exp(-(t - t_lost) / PeriodicWave::kFadeTime);
+    if (weight >= PeriodicWave::kFadeEnd * 1.1)
+    {
+      EXPECT_NEAR(x, weight * displacement(t), 0.02 * kAmplitude / (kOmega * kOmega)) << t;
+    }
+    else if (weight < PeriodicWave::kFadeEnd * 0.9)
+    {
+      EXPECT_EQ(x, 0.0) << t;
+    }
+  }
+
+  PeriodicWave fresh;
+  fresh.setCapacity(1000);
+  fresh.reset(1);
+  fresh.start(kFrequency, kRate, kMemory, 1, true);
+  fresh.update(acceleration(0.0), kFrequency, 0.0, kRate, kMemory);
+  fresh.retire(kFrequency);
+  a = x = v = 1.0;
+  fresh.fade(dt, &a, &x, &v);
+  EXPECT_EQ(x, 1.0);
+}
+}  // namespace periodic_bias_compensation
