@@ -640,7 +640,7 @@ private:
       // cannot disprove it yet.
       const bool too_short = axis.locked && axis.tracker->samples() < 3.0 * rate_ / axis.frequency;
       if (axis.locked && !too_short)
-        axis.wave.retire(axis.frequency);
+        axis.wave.retire();
       axis.locked = axis.locked && too_short;
       return;
     }

@@ -16,9 +16,10 @@ void PeriodicWave::reset(int harmonics)
 
 void PeriodicWave::start(double frequency, double rate, double memory, int harmonics, bool fit_history)
 {
-  retire(frequency);
+  retire();
   model_.reset(harmonics);
   phase_ = 0.0;
+  frequency_ = frequency;
   if (!fit_history || rate <= 0.0)
     return;
   const double step = 2.0 * M_PI * frequency / rate;
@@ -30,12 +31,12 @@ void PeriodicWave::start(double frequency, double rate, double memory, int harmo
     model_.update(-(lag - 1) * step, history_.ago(lag), lambda);
 }
 
-void PeriodicWave::retire(double frequency)
+void PeriodicWave::retire()
 {
   if (!ready_)
     return;
   previous_ = model_;
-  previous_frequency_ = frequency;
+  previous_frequency_ = frequency_;
   previous_phase_ = phase_;
   previous_weight_ = 1.0;
   ready_ = false;
@@ -44,6 +45,7 @@ void PeriodicWave::retire(double frequency)
 PeriodicWaveOutput PeriodicWave::update(double value, double frequency, double dt, double rate, double memory)
 {
   PeriodicWaveOutput out;
+  frequency_ = frequency;
   const double omega = 2.0 * M_PI * frequency;
   phase_ = std::fmod(phase_ + omega * dt, 2.0 * M_PI);
   out.residual = model_.update(phase_, value, std::exp(-dt / memory));

@@ -76,7 +76,7 @@ TEST(PeriodicWave, ALostLockFadesOut)
   double last = 0.0;
   for (; i < static_cast<int>(20.0 * kRate); ++i)
     last = wave.update(acceleration(i * dt), kFrequency, i ? dt : 0.0, kRate, kMemory).position;
-  wave.retire(kFrequency);
+  wave.retire();
   double a = 0.0, x = 0.0, v = 0.0;
   wave.fade(dt, &a, &x, &v);
   EXPECT_NEAR(x, last, 0.02 * kAmplitude / (kOmega * kOmega));  // no step
@@ -102,9 +102,28 @@ TEST(PeriodicWave, ALostLockFadesOut)
   fresh.reset(1);
   fresh.start(kFrequency, kRate, kMemory, 1, true);
   fresh.update(acceleration(0.0), kFrequency, 0.0, kRate, kMemory);
-  fresh.retire(kFrequency);
+  fresh.retire();
   a = x = v = 1.0;
   fresh.fade(dt, &a, &x, &v);
   EXPECT_EQ(x, 1.0);
+}
+// A lock that moves (0.125 -> 0.5 Hz): the old model fades at its own frequency, so the wave
+// estimate it is blended into goes on from where it was, without a step.
+TEST(PeriodicWave, AMovedLockFadesAtItsOwnFrequency)
+{
+  PeriodicWave wave;
+  wave.setCapacity(1000);
+  wave.reset(1);
+  wave.start(kFrequency, kRate, kMemory, 1, true);
+  const double dt = 1.0 / kRate;
+  int i = 0;
+  double last = 0.0;
+  for (; i < static_cast<int>(20.0 * kRate); ++i)
+    last = wave.update(acceleration(i * dt), kFrequency, i ? dt : 0.0, kRate, kMemory).position;
+  wave.start(4.0 * kFrequency, kRate, kMemory, 1, true);
+  double a = 0.0, x = 0.0, v = 0.0;
+  wave.fade(dt, &a, &x, &v);
+  EXPECT_NEAR(x, displacement(i * dt), 0.02 * kAmplitude / (kOmega * kOmega));
+  EXPECT_NEAR(x, last, 0.05 * kAmplitude / (kOmega * kOmega));
 }
 }  // namespace periodic_bias_compensation

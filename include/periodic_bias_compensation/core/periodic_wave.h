@@ -44,11 +44,12 @@ public:
   /// Forgets model, fading model and history.
   void reset(int harmonics);
 
-  /// A new lock at `frequency` [Hz]: the current model (if it has seen a period) fades out, a new
-  /// one starts, fitted to the history when fit_history (sample rate `rate` [Hz], memory [s]).
+  /// A new lock at `frequency` [Hz]: the current model (if it has seen a period) fades out at its
+  /// own frequency, a new one starts, fitted to the history when fit_history (sample rate `rate`
+  /// [Hz], memory [s]).
   void start(double frequency, double rate, double memory, int harmonics, bool fit_history);
-  /// The lock at `frequency` [Hz] was lost: its model fades out.
-  void retire(double frequency);
+  /// The lock was lost: its model fades out, extrapolated at the frequency it last followed.
+  void retire();
 
   /// A locked sample: `value` [m/s^2] at `frequency` [Hz] (the lock's, extrapolated to now), dt
   /// [s] after the previous one, at sample rate `rate` [Hz], with `memory` [s].
@@ -66,6 +67,7 @@ private:
   HarmonicEstimator model_;
   bool ready_ = false;  ///< model_ has described a period: its output is used
   double phase_ = 0.0;
+  double frequency_ = 0.0;      ///< the frequency model_ last followed [Hz]
   HarmonicEstimator previous_;  ///< the model of a lock that changed or was lost
   double previous_frequency_ = 0.0, previous_phase_ = 0.0, previous_weight_ = 0.0;
   SignalHistory history_;  ///< the model's input
