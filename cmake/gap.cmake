@@ -10,7 +10,8 @@ add_library(${PROJECT_NAME}_gap
   src/gap/truth.cpp
   src/gap/stages.cpp)
 target_include_directories(${PROJECT_NAME}_gap PUBLIC include)
-target_link_libraries(${PROJECT_NAME}_gap PUBLIC ${PROJECT_NAME}_sim ${PROJECT_NAME}_core Eigen3::Eigen PkgConfig::FFTW3)
+target_link_libraries(${PROJECT_NAME}_gap PUBLIC ${PROJECT_NAME}_sim ${PROJECT_NAME}_core Eigen3::Eigen PkgConfig::FFTW3
+  nlohmann_json::nlohmann_json)
 
 # validate_gap: the diagnosis on simulated recordings whose effect is withheld (no ROS).
 add_executable(validate_gap src/tools/validate_gap.cpp)

@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <set>
 #include <sstream>
 
@@ -43,36 +44,16 @@ std::string num(double v)
   return buf;
 }
 
-std::string str(const std::string& s)
+nlohmann::ordered_json departureJson(const Departure& d)
 {
-  std::string o = "\"";
-  for (char c : s)
-  {
-    if (c == '"' || c == '\\')
-    {
-      o += '\\';
-      o += c;
-    }
-    else if (c == '\n')
-    {
-      o += "\\n";
-    }
-    else
-    {
-      o += c;
-    }
-  }
-  return o + "\"";
-}
-
-std::string departureJson(const Departure& d)
-{
-  std::ostringstream o;
-  o << "{\"axis\": " << str(d.where.channel) << ", \"quantity\": " << str(d.where.quantity)
-    << ", \"range\": " << str(d.where.range) << ", \"segment\": " << str(d.where.segment)
-    << ", \"stage\": " << str(d.where.stage) << ", \"real\": " << num(d.real)
-    << ", \"sim_median\": " << num(d.sim_median) << ", \"size_z\": " << num(d.z) << "}";
-  return o.str();
+  return { { "axis", d.where.channel },
+           { "quantity", d.where.quantity },
+           { "range", d.where.range },
+           { "segment", d.where.segment },
+           { "stage", d.where.stage },
+           { "real", sixDigits(d.real) },
+           { "sim_median", sixDigits(d.sim_median) },
+           { "size_z", sixDigits(d.z) } };
 }
 
 /// Means of `blocks` consecutive blocks of rows (the last block takes what is left).
@@ -561,8 +542,7 @@ void tryBestPair(const DiagnoseContext& context, const Report& rep, std::vector<
   pair.effect = cands[0].effect + "+" + cands[j].effect;
   pair.specs = cands[0].specs;
   pair.specs.insert(pair.specs.end(), cands[j].specs.begin(), cands[j].specs.end());
-  pair.params_json = "{\"" + cands[0].effect + "\": " + cands[0].params_json + ", \"" + cands[j].effect +
-                     "\": " + cands[j].params_json + "}";
+  pair.params = { { cands[0].effect, cands[0].params }, { cands[j].effect, cands[j].params } };
   pair.note = "best two together";
   std::vector<Candidate> one{ pair };
   judge(context, rep, &one);
@@ -600,14 +580,14 @@ void verdictStage(const DiagnoseOptions& opt, Report* rep)
   if (!significant)
   {
     rep->verdict_effect = "no_gap";
-    rep->verdict_params = "{}";
+    rep->verdict_params = nlohmann::ordered_json::object();
     rep->confidence = 0.0;
     rep->verdict_text = "no significant gap: the recording lies within the simulated ensemble's spread";
   }
   else if (rep->ranking.empty() || rep->ranking[0].shrink < opt.min_shrink)
   {
     rep->verdict_effect = "none";
-    rep->verdict_params = "{}";
+    rep->verdict_params = nlohmann::ordered_json::object();
     rep->confidence = 0.0;
     rep->shrink_withheld = rep->ranking.empty() ? 0.0 : rep->ranking[0].shrink;
     rep->verdict_text = "no candidate explains the gap (best shrink below " + num(opt.min_shrink) +
@@ -627,7 +607,7 @@ void verdictStage(const DiagnoseOptions& opt, Report* rep)
     }
     rep->best = 0;
     rep->verdict_effect = b.effect;
-    rep->verdict_params = b.params_json;
+    rep->verdict_params = b.params;
     rep->shrink_withheld = b.shrink;
     const double margin = b.shrink - std::max(0.0, second);
     rep->confidence = std::max(0.0, std::min(1.0, b.shrink)) * std::max(0.0, std::min(1.0, 0.4 + margin / 0.4));
@@ -775,86 +755,104 @@ Report diagnose(const Recording& real_in, const sim::Scenario& scenario_in, cons
   return rep;
 }
 
-namespace
+double sixDigits(double v)
 {
-std::string motionSummaryJson(const MotionSummary& m)
-{
-  std::ostringstream o;
-  o << "{\"roll\": " << num(m.roll) << ", \"pitch\": " << num(m.pitch)
-    << ", \"heading\": " << (std::isfinite(m.heading) ? num(m.heading) : std::string("null"))
-    << ", \"wave_height\": " << num(m.wave_height) << ", \"peak_period\": " << num(m.peak_period) << "}";
-  return o.str();
+  if (!std::isfinite(v))
+  {
+    return v;
+  }
+  char buf[40];
+  std::snprintf(buf, sizeof(buf), "%.6g", v);
+  return std::strtod(buf, nullptr);
 }
 
-std::string motionJson(const MotionFit& m)
+namespace
 {
-  std::ostringstream o;
-  o << "{\"differs\": " << (m.differs ? "true" : "false") << ", \"adopted\": " << str(m.adopted)
-    << ",\n    \"real\": " << motionSummaryJson(m.real) << ",\n    \"scenario\": " << motionSummaryJson(m.scenario)
-    << ",\n    \"findings\": [";
-  for (std::size_t i = 0; i < m.findings.size(); ++i)
-    o << (i ? ", " : "") << str(m.findings[i]);
-  o << "], \"gap_before\": " << num(m.gap_before) << ", \"gap_after\": " << num(m.gap_after) << "}";
-  return o.str();
+nlohmann::ordered_json motionSummaryJson(const MotionSummary& m)
+{
+  return { { "roll", sixDigits(m.roll) },
+           { "pitch", sixDigits(m.pitch) },
+           { "heading", sixDigits(m.heading) },
+           { "wave_height", sixDigits(m.wave_height) },
+           { "peak_period", sixDigits(m.peak_period) } };
+}
+
+nlohmann::ordered_json motionJson(const MotionFit& m)
+{
+  return { { "differs", m.differs },
+           { "adopted", m.adopted },
+           { "real", motionSummaryJson(m.real) },
+           { "scenario", motionSummaryJson(m.scenario) },
+           { "findings", m.findings },
+           { "gap_before", sixDigits(m.gap_before) },
+           { "gap_after", sixDigits(m.gap_after) } };
+}
+
+nlohmann::ordered_json departuresJson(const std::vector<Departure>& departures)
+{
+  nlohmann::ordered_json j = nlohmann::ordered_json::array();
+  for (const Departure& d : departures)
+  {
+    j.push_back(departureJson(d));
+  }
+  return j;
+}
+
+nlohmann::ordered_json rankingJson(const std::vector<Candidate>& ranking)
+{
+  nlohmann::ordered_json j = nlohmann::ordered_json::array();
+  for (const Candidate& c : ranking)
+  {
+    j.push_back({ { "effect", c.effect },
+                  { "params", c.params },
+                  { "gap_before", sixDigits(c.gap_before) },
+                  { "gap_after", sixDigits(c.gap_after) },
+                  { "shrink", sixDigits(c.shrink) },
+                  { "fit", c.note } });
+  }
+  return j;
 }
 }  // namespace
 
-std::string reportJson(const Report& r)
+nlohmann::ordered_json reportJson(const Report& r)
 {
-  std::ostringstream o;
-  o << "{\n  \"schema\": \"periodic_bias_compensation/gap_report/1\",\n";
-  o << "  \"real\": {\"source\": " << str(r.real_source) << ", \"rate_hz\": " << num(r.rate)
-    << ", \"duration_s\": " << num(r.duration) << ", \"samples\": " << r.samples << "},\n";
-  o << "  \"scenario\": " << str(r.scenario_name) << ",\n";
-  o << "  \"motion\": " << motionJson(r.motion) << ",\n";
-  o << "  \"gap_metric\": \"rms over features of log(1 + max(0, |z| - 3)), z = (real - ensemble median) / ensemble "
-       "spread\",\n";
-  o << "  \"gap_all\": " << num(r.gap_all) << ", \"null_gap_all\": " << num(r.null_gap) << ",\n";
-  o << "  \"where\": [";
-  for (std::size_t i = 0; i < r.where.size(); ++i)
+  nlohmann::ordered_json j;
+  j["schema"] = "periodic_bias_compensation/gap_report/1";
+  j["real"] = { { "source", r.real_source },
+                { "rate_hz", sixDigits(r.rate) },
+                { "duration_s", sixDigits(r.duration) },
+                { "samples", r.samples } };
+  j["scenario"] = r.scenario_name;
+  j["motion"] = motionJson(r.motion);
+  j["gap_metric"] = "rms over features of log(1 + max(0, |z| - 3)), z = (real - ensemble median) / ensemble spread";
+  j["gap_all"] = sixDigits(r.gap_all);
+  j["null_gap_all"] = sixDigits(r.null_gap);
+  j["where"] = departuresJson(r.where);
+  j["direct"] = nlohmann::ordered_json::array();
+  for (const DirectDetection& d : r.direct)
   {
-    o << (i ? ",\n    " : "\n    ") << departureJson(r.where[i]);
+    j["direct"].push_back({ { "effect", d.effect }, { "detected", d.detected }, { "evidence", d.evidence } });
   }
-  o << "\n  ],\n";
-  o << "  \"direct\": [";
-  for (std::size_t i = 0; i < r.direct.size(); ++i)
-  {
-    o << (i ? ",\n    " : "\n    ") << "{\"effect\": " << str(r.direct[i].effect)
-      << ", \"detected\": " << (r.direct[i].detected ? "true" : "false")
-      << ", \"evidence\": " << str(r.direct[i].evidence) << "}";
-  }
-  o << "\n  ],\n";
-  o << "  \"withheld\": {\"gap_before\": " << num(r.gap_before) << ", \"null_gap\": " << num(r.null_gap_held)
-    << ", \"null_gap_typical\": " << num(r.null_gap_typical) << ", \"max_z\": " << num(r.max_z_held)
-    << ", \"null_max_z\": " << num(r.null_max_z_held) << "},\n";
-  o << "  \"ranking\": [";
-  for (std::size_t i = 0; i < r.ranking.size(); ++i)
-  {
-    const Candidate& c = r.ranking[i];
-    o << (i ? ",\n    " : "\n    ") << "{\"effect\": " << str(c.effect)
-      << ", \"params\": " << (c.params_json.empty() ? "{}" : c.params_json) << ", \"gap_before\": " << num(c.gap_before)
-      << ", \"gap_after\": " << num(c.gap_after) << ", \"shrink\": " << num(c.shrink) << ", \"fit\": " << str(c.note)
-      << "}";
-  }
-  o << "\n  ],\n";
-  o << "  \"verdict\": {\"effect\": " << str(r.verdict_effect) << ", \"params\": " << r.verdict_params
-    << ", \"confidence\": " << num(r.confidence) << ", \"shrink_withheld\": " << num(r.shrink_withheld)
-    << ", \"text\": " << str(r.verdict_text) << "},\n";
-  o << "  \"localised\": [";
+  j["withheld"] = { { "gap_before", sixDigits(r.gap_before) },
+                    { "null_gap", sixDigits(r.null_gap_held) },
+                    { "null_gap_typical", sixDigits(r.null_gap_typical) },
+                    { "max_z", sixDigits(r.max_z_held) },
+                    { "null_max_z", sixDigits(r.null_max_z_held) } };
+  j["ranking"] = rankingJson(r.ranking);
+  j["verdict"] = { { "effect", r.verdict_effect },
+                   { "params", r.verdict_params },
+                   { "confidence", sixDigits(r.confidence) },
+                   { "shrink_withheld", sixDigits(r.shrink_withheld) },
+                   { "text", r.verdict_text } };
+  j["localised"] = nlohmann::ordered_json::array();
   for (std::size_t i = 0; i < r.where_held.size(); ++i)
   {
-    o << (i ? ",\n    " : "\n    ") << "{\"where\": " << departureJson(r.where_held[i])
-      << ", \"z_after\": " << (i < r.where_held_after.size() ? num(r.where_held_after[i]) : "null") << "}";
+    const double z_after = i < r.where_held_after.size() ? r.where_held_after[i] : NAN;
+    j["localised"].push_back({ { "where", departureJson(r.where_held[i]) }, { "z_after", sixDigits(z_after) } });
   }
-  o << "\n  ],\n";
-  o << "  \"truth\": {\"compared\": " << (r.has_truth ? "true" : "false") << ", \"departures\": [";
-  for (std::size_t i = 0; i < r.truth_where.size(); ++i)
-  {
-    o << (i ? ",\n    " : "\n    ") << departureJson(r.truth_where[i]);
-  }
-  o << "]},\n";
-  o << "  \"seconds\": " << num(r.seconds) << "\n}\n";
-  return o.str();
+  j["truth"] = { { "compared", r.has_truth }, { "departures", departuresJson(r.truth_where) } };
+  j["seconds"] = sixDigits(r.seconds);
+  return j;
 }
 
 std::string reportSummary(const Report& r)
@@ -910,11 +908,11 @@ std::string reportSummary(const Report& r)
   {
     const Candidate& c = r.ranking[i];
     std::snprintf(buf, sizeof(buf), "  %-34s gap %.3g -> %.3g  shrink %+6.1f %%  %.150s\n", c.effect.c_str(),
-                  c.gap_before, c.gap_after, 100 * c.shrink, c.params_json.c_str());
+                  c.gap_before, c.gap_after, 100 * c.shrink, c.params.dump().c_str());
     o << buf;
   }
   std::snprintf(buf, sizeof(buf), "VERDICT: %s (confidence %.2f, shrink on withheld %.0f %%)\n  params %s\n  %s\n",
-                r.verdict_effect.c_str(), r.confidence, 100 * r.shrink_withheld, r.verdict_params.c_str(),
+                r.verdict_effect.c_str(), r.confidence, 100 * r.shrink_withheld, r.verdict_params.dump().c_str(),
                 r.verdict_text.c_str());
   o << buf;
   std::snprintf(buf, sizeof(buf), "(%.1f s)\n", r.seconds);

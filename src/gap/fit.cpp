@@ -6,10 +6,8 @@
 // scenario; additive effects carry the scenario's own value plus the fitted difference.
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <limits>
 #include <optional>
-#include <sstream>
 
 #include <Eigen/Dense>
 
@@ -57,33 +55,20 @@ double medianOf(Vec v)
   return v[v.size() / 2];
 }
 
-std::string num(double v)
+/// The parameters of an effect: a number, or a list for vector parameters.
+nlohmann::ordered_json paramsJson(const sim::EffectSpec& spec)
 {
-  char buf[40];
-  std::snprintf(buf, sizeof(buf), "%.6g", v);
-  return buf;
-}
-
-std::string jsonList(const Vec& v)
-{
-  std::string s = "[";
-  for (std::size_t i = 0; i < v.size(); ++i)
-  {
-    s += (i ? ", " : "") + num(v[i]);
-  }
-  return s + "]";
-}
-
-std::string paramsJson(const sim::EffectSpec& spec)
-{
-  std::string s = "{";
-  bool first = true;
+  nlohmann::ordered_json j = nlohmann::ordered_json::object();
   for (const auto& [k, v] : spec.params)
   {
-    s += (first ? "\"" : ", \"") + k + "\": " + (v.size() == 1 ? num(v[0]) : jsonList(v));
-    first = false;
+    nlohmann::ordered_json values = nlohmann::ordered_json::array();
+    for (double a : v)
+    {
+      values.push_back(sixDigits(a));
+    }
+    j[k] = v.size() == 1 ? values[0] : values;
   }
-  return s + "}";
+  return j;
 }
 
 /// Enabled occurrences of an effect in the scenario, completed with defaults.
@@ -539,7 +524,7 @@ Candidate make(const std::string& name, std::vector<sim::EffectSpec> specs, cons
   c.note = note;
   if (!c.specs.empty())
   {
-    c.params_json = paramsJson(c.specs.back());
+    c.params = paramsJson(c.specs.back());
   }
   return c;
 }

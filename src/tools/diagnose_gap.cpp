@@ -43,6 +43,7 @@
 #include <rosbag/view.h>
 #include <sensor_msgs/Imu.h>
 #include <sensor_msgs/Temperature.h>
+#include <nlohmann/json.hpp>
 
 #include "periodic_bias_compensation/gap/csv.h"
 #include "periodic_bias_compensation/gap/gap.h"
@@ -287,7 +288,7 @@ std::string reportMarkdown(const gap::Report& rep, const Options& o, bool plots)
   md << buf;
   md << "## Verdict\n\n**" << rep.verdict_effect << "** (confidence " << rep.confidence
      << ", shrink on the withheld part " << static_cast<int>(std::lround(100 * rep.shrink_withheld))
-     << " %): " << rep.verdict_text << "\n\nparams: `" << rep.verdict_params << "`\n\n";
+     << " %): " << rep.verdict_text << "\n\nparams: `" << rep.verdict_params.dump() << "`\n\n";
   md << "## 0. Motion (before any sensor effect)\n\n";
   const gap::MotionFit& m = rep.motion;
   if (!m.differs)
@@ -364,7 +365,7 @@ std::string reportMarkdown(const gap::Report& rep, const Options& o, bool plots)
     const auto& c = rep.ranking[i];
     std::snprintf(buf, sizeof(buf), "| %zu | %s | %.3g | %.3g | %.0f %% | `", i + 1, c.effect.c_str(), c.gap_before,
                   c.gap_after, 100 * c.shrink);
-    md << buf << c.params_json << "` |\n";
+    md << buf << c.params.dump() << "` |\n";
   }
   md << "\n## 3. How far it shrinks (withheld part, the places of largest departure)\n\n";
   md << "| axis | quantity | band / tau | segment | z before | z after |\n|---|---|---|---|---|---|\n";
@@ -446,7 +447,8 @@ std::optional<Options> parse(int argc, char** argv)
 /// One step of the stepwise diagnosis: the effect named and the figures it was named with.
 struct Step
 {
-  std::string effect, params;
+  std::string effect;
+  nlohmann::ordered_json params;
   double gap_before, shrink, confidence;
 };
 
@@ -480,11 +482,11 @@ Stepwise stepwiseDiagnosis(const gap::Report& rep, const gap::Recording& real, c
     }
     if (pick < 0)
     {
-      steps.push_back({ cur->verdict_effect, "{}", cur->gap_before, 0.0, 0.0 });
+      steps.push_back({ cur->verdict_effect, nlohmann::ordered_json::object(), cur->gap_before, 0.0, 0.0 });
       break;
     }
     const gap::Candidate& c = cur->ranking[pick];
-    steps.push_back({ c.effect, c.params_json, cur->gap_before, c.shrink, cur->confidence });
+    steps.push_back({ c.effect, c.params, cur->gap_before, c.shrink, cur->confidence });
     model = gap::applyCandidate(model, c);
     if (k + 1 < o.steps)
     {
@@ -495,25 +497,26 @@ Stepwise stepwiseDiagnosis(const gap::Report& rep, const gap::Recording& real, c
   return result;
 }
 
-/// report.json: the report with its "stepwise" array before "seconds".
+/// report.json: the report with its "stepwise" array before "seconds", indented by 2.
 std::string stepwiseJson(const gap::Report& rep, const std::vector<Step>& steps)
 {
-  std::ostringstream stepwise;
-  stepwise << "[";
+  nlohmann::ordered_json stepwise = nlohmann::ordered_json::array();
   for (std::size_t i = 0; i < steps.size(); ++i)
   {
-    char buf[200];
-    std::snprintf(buf, sizeof(buf),
-                  "{\"step\": %zu, \"effect\": \"%s\", \"gap_before\": %.6g, \"shrink\": %.6g, \"confidence\": %.6g, "
-                  "\"params\": ",
-                  i + 1, steps[i].effect.c_str(), steps[i].gap_before, steps[i].shrink, steps[i].confidence);
-    stepwise << (i ? ",\n    " : "\n    ") << buf << steps[i].params << "}";
+    stepwise.push_back({ { "step", i + 1 },
+                         { "effect", steps[i].effect },
+                         { "gap_before", gap::sixDigits(steps[i].gap_before) },
+                         { "shrink", gap::sixDigits(steps[i].shrink) },
+                         { "confidence", gap::sixDigits(steps[i].confidence) },
+                         { "params", steps[i].params } });
   }
-  stepwise << "\n  ]";
-  std::string json = gap::reportJson(rep);
-  const auto pos = json.rfind("  \"seconds\"");
-  json.insert(pos, "  \"stepwise\": " + stepwise.str() + ",\n");
-  return json;
+  nlohmann::ordered_json json = gap::reportJson(rep);
+  const nlohmann::ordered_json seconds = json["seconds"];
+  json.erase("seconds");
+  json["stepwise"] = stepwise;
+  json["seconds"] = seconds;
+  // A path that is not UTF-8 (the source) gets U+FFFD for its invalid bytes.
+  return json.dump(2, ' ', false, nlohmann::ordered_json::error_handler_t::replace) + "\n";
 }
 
 /// The plots of DIR (scripts/gap_plots.py); whether they were made.
@@ -543,7 +546,7 @@ std::string stepwiseMarkdown(const std::vector<Step>& steps)
     char buf[160];
     std::snprintf(buf, sizeof(buf), "| %zu | %s | %.3g | %.0f %% | %.2f | `", i + 1, steps[i].effect.c_str(),
                   steps[i].gap_before, 100 * steps[i].shrink, steps[i].confidence);
-    sm << buf << steps[i].params << "` |\n";
+    sm << buf << steps[i].params.dump() << "` |\n";
   }
   sm << "\nThe model with every named effect: `fitted_scenario.yaml`.\n";
   return sm.str();

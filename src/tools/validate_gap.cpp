@@ -24,6 +24,8 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "periodic_bias_compensation/gap/gap.h"
 #include "periodic_bias_compensation/sim/effects.h"
 #include "periodic_bias_compensation/sim/scenario.h"
@@ -772,22 +774,30 @@ std::string casesMarkdown(const std::vector<CaseResult>& results, const Scores& 
   return md.str();
 }
 
+/// The --json file: the scores and every case, indented by 2.
 std::string resultsJson(const std::vector<CaseResult>& results, const Scores& s)
 {
-  std::ostringstream j;
-  j << "{\"accuracy\": " << s.accuracy << ", \"median_shrink\": " << s.median_shrink
-    << ", \"null_confident\": " << s.null_confident << ", \"cases\": [\n";
-  for (std::size_t i = 0; i < results.size(); ++i)
+  nlohmann::ordered_json cases = nlohmann::ordered_json::array();
+  for (const auto& c : results)
   {
-    const auto& c = results[i];
-    j << (i ? ",\n" : "") << "{\"motion\": \"" << c.motion << "\", \"effect\": \"" << c.effect
-      << "\", \"size\": " << c.size << ", \"seed\": " << c.seed << ", \"verdict\": \"" << c.verdict
-      << "\", \"confidence\": " << c.confidence << ", \"shrink\": " << c.shrink << ", \"gap_before\": " << c.gap_before
-      << ", \"null_gap\": " << c.null_gap << ", \"detectable\": " << (c.detectable ? "true" : "false")
-      << ", \"effect_gap\": " << c.effect_gap << ", \"effect_max_z\": " << c.effect_max_z << "}";
+    cases.push_back({ { "motion", c.motion },
+                      { "effect", c.effect },
+                      { "size", gap::sixDigits(c.size) },
+                      { "seed", c.seed },
+                      { "verdict", c.verdict },
+                      { "confidence", gap::sixDigits(c.confidence) },
+                      { "shrink", gap::sixDigits(c.shrink) },
+                      { "gap_before", gap::sixDigits(c.gap_before) },
+                      { "null_gap", gap::sixDigits(c.null_gap) },
+                      { "detectable", c.detectable },
+                      { "effect_gap", gap::sixDigits(c.effect_gap) },
+                      { "effect_max_z", gap::sixDigits(c.effect_max_z) } });
   }
-  j << "\n]}\n";
-  return j.str();
+  const nlohmann::ordered_json j = { { "accuracy", gap::sixDigits(s.accuracy) },
+                                     { "median_shrink", gap::sixDigits(s.median_shrink) },
+                                     { "null_confident", s.null_confident },
+                                     { "cases", cases } };
+  return j.dump(2) + "\n";
 }
 
 /// The validation (or --bench-hours), writing its tables to the outputs given.

@@ -16,8 +16,11 @@
 #include <sstream>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
 
 #include "../common/shell.h"
 #include "periodic_bias_compensation/gap/gap.h"
@@ -38,6 +41,26 @@ std::string readAll(const std::string& path)
   std::stringstream ss;
   ss << in.rdbuf();
   return ss.str();
+}
+
+/// Every departure of a report.json: in "where", in "localised" and in "truth".
+std::vector<nlohmann::json> departures(const nlohmann::json& report)
+{
+  std::vector<nlohmann::json> out(report.at("where").begin(), report.at("where").end());
+  for (const auto& l : report.at("localised"))
+  {
+    out.push_back(l.at("where"));
+  }
+  out.insert(out.end(), report.at("truth").at("departures").begin(), report.at("truth").at("departures").end());
+  return out;
+}
+
+/// Whether a report.json has a departure of `quantity` on `axis`.
+bool hasDeparture(const nlohmann::json& report, const std::string& axis, const std::string& quantity)
+{
+  const auto all = departures(report);
+  return std::any_of(all.begin(), all.end(),
+                     [&](const nlohmann::json& d) { return d.at("axis") == axis && d.at("quantity") == quantity; });
 }
 
 std::string tempDir()
@@ -157,11 +180,16 @@ TEST(GapDiagnose, NamesAWithheldVibrationAndShrinksTheGap)
   EXPECT_GT(rep.shrink_withheld, 0.7);
   EXPECT_GT(rep.confidence, 0.5);
   ASSERT_FALSE(rep.where.empty());
-  const std::string json = gap::reportJson(rep);
-  for (const char* key : { "\"where\"", "\"ranking\"", "\"verdict\"", "\"confidence\"", "\"shrink_withheld\"",
-                           "\"gap_before\"", "\"gap_after\"", "\"shrink\"" })
+  const nlohmann::ordered_json json = gap::reportJson(rep);
+  EXPECT_FALSE(json.at("where").empty());
+  ASSERT_FALSE(json.at("ranking").empty());
+  for (const char* key : { "gap_before", "gap_after", "shrink" })
   {
-    EXPECT_NE(json.find(key), std::string::npos) << key;
+    EXPECT_TRUE(json["ranking"][0].contains(key)) << key;
+  }
+  for (const char* key : { "confidence", "shrink_withheld" })
+  {
+    EXPECT_TRUE(json.at("verdict").contains(key)) << key;
   }
 }
 
@@ -217,8 +245,8 @@ TEST(GapTool, DiagnosesASimulatedBagAndACsv)
             "/bag --no-plots");
   ASSERT_EQ(r.status, 0) << r.output;
   EXPECT_NE(r.output.find("VERDICT: quantization"), std::string::npos) << r.output;
-  const std::string json = readAll(dir + "/bag/report.json");
-  EXPECT_NE(json.find("\"verdict\": {\"effect\": \"quantization\""), std::string::npos) << json;
+  const nlohmann::json json = nlohmann::json::parse(readAll(dir + "/bag/report.json"));
+  EXPECT_EQ(json.at("verdict").at("effect"), "quantization") << json.dump(2);
   EXPECT_TRUE(fs::exists(dir + "/bag/report.md"));
   r = shell(std::string(PBC_DIAGNOSE_GAP) + " --real-csv " + dir +
             "/real.csv --columns t=t,ax=ax,ay=ay,az=az,gx=gx,gy=gy,gz=gz" + " --sim " + scen + " --out " + dir +
@@ -327,7 +355,7 @@ TEST(GapTruth, LocatesABiasStepInTimeAndAxis)
   // the truth departures are in `where` too, and in report.json
   EXPECT_TRUE(std::any_of(rep.where.begin(), rep.where.end(),
                           [](const gap::Departure& d) { return d.where.stage == "truth"; }));
-  EXPECT_NE(gap::reportJson(rep).find("\"truth\": {\"compared\": true"), std::string::npos);
+  EXPECT_EQ(gap::reportJson(rep).at("truth").at("compared"), true);
 }
 
 TEST(GapTruth, BagWithATruthTopic)
@@ -343,12 +371,12 @@ TEST(GapTruth, BagWithATruthTopic)
   r = shell(std::string(PBC_DIAGNOSE_GAP) + " --real " + dir + "/real.bag --sim " + scen + " --out " + dir +
             "/out --no-plots --steps 1 --truth-topic ground_truth/odometry");
   ASSERT_EQ(r.status, 0) << r.output;
-  const std::string json = readAll(dir + "/out/report.json");
-  EXPECT_NE(json.find("\"truth\": {\"compared\": true"), std::string::npos) << json;
-  EXPECT_NE(json.find("{\"axis\": \"az\", \"quantity\": \"truth_mean\""), std::string::npos) << r.output;
+  const nlohmann::json json = nlohmann::json::parse(readAll(dir + "/out/report.json"));
+  EXPECT_EQ(json.at("truth").at("compared"), true) << json.dump(2);
+  EXPECT_TRUE(hasDeparture(json, "az", "truth_mean")) << r.output;
   EXPECT_TRUE(fs::exists(dir + "/out/truth.csv"));
   // the compensator's own constant-bias estimate on the vertical departs too (stage compensator)
-  EXPECT_NE(json.find("{\"axis\": \"level z\", \"quantity\": \"comp_bias\""), std::string::npos) << r.output;
+  EXPECT_TRUE(hasDeparture(json, "level z", "comp_bias")) << r.output;
   // an explicit truth topic that the bag lacks is an error
   EXPECT_EQ(shell(std::string(PBC_DIAGNOSE_GAP) + " --real " + dir + "/real.bag --sim " + scen + " --out " + dir +
                   "/x --no-plots --truth-topic no/such/topic")
@@ -375,20 +403,16 @@ TEST(GapRealData, RobotArmAgainstItsTruth)
             std::string(PBC_SOURCE_DIR) + "/config/scenarios/gap_robot_arm_mpu9150.yaml --out " + dir +
             " --no-plots --steps 1 --ensemble 4 --truth-smooth 0.5");
   ASSERT_EQ(r.status, 0) << r.output;
-  const std::string json = readAll(dir + "/report.json");
-  EXPECT_NE(json.find("\"truth\": {\"compared\": true"), std::string::npos) << json;
+  const nlohmann::json json = nlohmann::json::parse(readAll(dir + "/report.json"));
+  EXPECT_EQ(json.at("truth").at("compared"), true) << json.dump(2);
   // the robot's quaternion, conjugated, is the sensor's attitude: the gyro then follows the
   // truth's rate, so no gyro mean is off by more than 0.05 rad/s (its rates reach 0.7 rad/s)
-  std::size_t pos = 0;
-  while ((pos = json.find("\"quantity\": \"truth_mean\"", pos)) != std::string::npos)
+  for (const nlohmann::json& d : departures(json))
   {
-    const std::size_t axis = json.rfind("\"axis\": \"", pos);
-    const std::size_t real = json.find("\"real\": ", pos);
-    if (json.compare(axis + 9, 1, "g") == 0)
+    if (d.at("quantity") == "truth_mean" && d.at("axis").get<std::string>().rfind('g', 0) == 0)
     {
-      EXPECT_LT(std::abs(std::stod(json.substr(real + 8))), 0.05) << json.substr(axis, 200);
+      EXPECT_LT(std::abs(d.at("real").get<double>()), 0.05) << d.dump();
     }
-    ++pos;
   }
   std::error_code ec;
   fs::remove_all(dir, ec);

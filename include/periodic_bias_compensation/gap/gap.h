@@ -14,6 +14,7 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <nlohmann/json.hpp>
 
 #include "periodic_bias_compensation/sim/scenario.h"
 
@@ -262,10 +263,10 @@ struct DiagnoseOptions
 /// One candidate effect with fitted parameters and its gap on the withheld part.
 struct Candidate
 {
-  std::string effect;                  ///< vocabulary name, or "a+b" for a pair
-  std::vector<sim::EffectSpec> specs;  ///< what is added / changed in the scenario
-  std::string params_json;             ///< fitted parameters (JSON object)
-  std::string note;                    ///< how it was fitted
+  std::string effect;                                                ///< vocabulary name, or "a+b" for a pair
+  std::vector<sim::EffectSpec> specs;                                ///< what is added / changed in the scenario
+  nlohmann::ordered_json params = nlohmann::ordered_json::object();  ///< fitted parameters
+  std::string note;                                                  ///< how it was fitted
   double gap_before = 0.0;
   double gap_after = 0.0;
   double shrink = 0.0;          ///< (before - after) / (before - typical null gap), at most 1
@@ -353,7 +354,7 @@ struct Report
   std::vector<DirectDetection> direct;
   // verdict
   std::string verdict_effect;  ///< effect name, "a+b", "none" (no candidate explains) or "no_gap"
-  std::string verdict_params;  ///< JSON
+  nlohmann::ordered_json verdict_params = nlohmann::ordered_json::object();  ///< the verdict's fitted parameters
   double confidence = 0.0;
   double shrink_withheld = 0.0;
   std::string verdict_text;
@@ -382,8 +383,12 @@ Report diagnose(const Recording& real, const sim::Scenario& scenario, const Diag
 /// The scenario with a candidate's effects in place of those of the same name.
 sim::Scenario applyCandidate(const sim::Scenario& scenario, const Candidate& candidate);
 
-/// report.json text.
-std::string reportJson(const Report& report);
+/// v to 6 significant digits, the precision of the numbers in report.json; non-finite values pass
+/// through (nlohmann::json writes them as null).
+double sixDigits(double v);
+
+/// report.json: its keys in the order written.
+nlohmann::ordered_json reportJson(const Report& report);
 
 /// One-screen summary.
 std::string reportSummary(const Report& report);
