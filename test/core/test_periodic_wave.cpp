@@ -21,6 +21,19 @@ double displacement(double t)
 {
   return -acceleration(t) / (kOmega * kOmega);
 }
+
+/// A model locked at kFrequency from the first sample on, fed `samples` samples of the wave;
+/// *last: its last position [m].
+PeriodicWave lockedWave(int samples, double* last)
+{
+  PeriodicWave wave;
+  wave.setCapacity(1000);
+  wave.reset(1);
+  wave.start(kFrequency, kRate, kMemory, 1, true);
+  for (int i = 0; i < samples; ++i)
+    *last = wave.update(acceleration(i / kRate), kFrequency, i ? 1.0 / kRate : 0.0, kRate, kMemory).position;
+  return wave;
+}
 }  // namespace
 
 // Locked from the first sample: nothing is claimed before a period; after two, the displacement
@@ -67,15 +80,10 @@ TEST(PeriodicWave, StartsFromItsHistory)
 // period leaves nothing to fade.
 TEST(PeriodicWave, ALostLockFadesOut)
 {
-  PeriodicWave wave;
-  wave.setCapacity(1000);
-  wave.reset(1);
-  wave.start(kFrequency, kRate, kMemory, 1, true);
   const double dt = 1.0 / kRate;
-  int i = 0;
+  int i = static_cast<int>(20.0 * kRate);
   double last = 0.0;
-  for (; i < static_cast<int>(20.0 * kRate); ++i)
-    last = wave.update(acceleration(i * dt), kFrequency, i ? dt : 0.0, kRate, kMemory).position;
+  PeriodicWave wave = lockedWave(i, &last);
   wave.retire();
   double a = 0.0, x = 0.0, v = 0.0;
   wave.fade(dt, &a, &x, &v);
@@ -107,19 +115,15 @@ TEST(PeriodicWave, ALostLockFadesOut)
   fresh.fade(dt, &a, &x, &v);
   EXPECT_EQ(x, 1.0);
 }
+
 // A lock that moves (0.125 -> 0.5 Hz): the old model fades at its own frequency, so the wave
 // estimate it is blended into goes on from where it was, without a step.
 TEST(PeriodicWave, AMovedLockFadesAtItsOwnFrequency)
 {
-  PeriodicWave wave;
-  wave.setCapacity(1000);
-  wave.reset(1);
-  wave.start(kFrequency, kRate, kMemory, 1, true);
   const double dt = 1.0 / kRate;
-  int i = 0;
+  int i = static_cast<int>(20.0 * kRate);
   double last = 0.0;
-  for (; i < static_cast<int>(20.0 * kRate); ++i)
-    last = wave.update(acceleration(i * dt), kFrequency, i ? dt : 0.0, kRate, kMemory).position;
+  PeriodicWave wave = lockedWave(i, &last);
   wave.start(4.0 * kFrequency, kRate, kMemory, 1, true);
   double a = 0.0, x = 0.0, v = 0.0;
   wave.fade(dt, &a, &x, &v);
