@@ -709,10 +709,10 @@ private:
       // Fitted to the acceleration less the calibrated offset, not less the drift observer's
       // moving bias: the model's own constant follows slow bias, and the observer's bias, which
       // follows acceleration up to about 1 / (2 pi drift_time_constant), stays out of its residual.
-      const PeriodicWaveOutput model =
-          axis.wave.update(offsetFree(raw, i), frequency, dt, rate_, config_.harmonic_memory);
+      const double lambda = std::exp(-dt / config_.harmonic_memory);
+      const PeriodicWaveOutput model = axis.wave.update(offsetFree(raw, i), frequency, dt, rate_, lambda);
       residual = model.residual;
-      const double beta = 1.0 - std::exp(-dt / config_.harmonic_memory);
+      const double beta = 1.0 - lambda;
       axis.residual_variance = (1.0 - beta) * axis.residual_variance + beta * residual * residual;
       wave_a = model.acceleration;
       wave_x = model.position;

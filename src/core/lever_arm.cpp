@@ -1,4 +1,5 @@
 #include "periodic_bias_compensation/core/lever_arm.h"
+#include "periodic_bias_compensation/core/turn_detector.h"
 
 #include <algorithm>
 #include <cmath>
@@ -29,7 +30,7 @@ LeverArmOutput LeverArm::update(const Eigen::Quaterniond& orientation, double dt
   if (!active())
     return out;
   const Eigen::Matrix3d rotation = orientation.normalized().toRotationMatrix();
-  const double heading = std::atan2(rotation(1, 0), rotation(0, 0));
+  const double heading = headingOf(rotation);
   const Eigen::AngleAxisd turn(heading, Eigen::Vector3d::UnitZ());
   // The tilt's displacement in the frame that turns with the heading.
   const Eigen::Vector3d tilted = turn.inverse() * (rotation * offset_);

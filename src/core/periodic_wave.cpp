@@ -42,13 +42,13 @@ void PeriodicWave::retire()
   ready_ = false;
 }
 
-PeriodicWaveOutput PeriodicWave::update(double value, double frequency, double dt, double rate, double memory)
+PeriodicWaveOutput PeriodicWave::update(double value, double frequency, double dt, double rate, double lambda)
 {
   PeriodicWaveOutput out;
   frequency_ = frequency;
   const double omega = 2.0 * M_PI * frequency;
   phase_ = std::fmod(phase_ + omega * dt, 2.0 * M_PI);
-  out.residual = model_.update(phase_, value, std::exp(-dt / memory));
+  out.residual = model_.update(phase_, value, lambda);
   history_.push(value);
   // A fit of less than one period is not yet a description of the oscillation.
   if (model_.updates() >= rate / frequency)

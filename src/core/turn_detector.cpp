@@ -7,7 +7,11 @@ namespace periodic_bias_compensation
 {
 double headingOf(const Eigen::Quaterniond& orientation)
 {
-  const Eigen::Matrix3d rotation = orientation.toRotationMatrix();
+  return headingOf(orientation.toRotationMatrix());
+}
+
+double headingOf(const Eigen::Matrix3d& rotation)
+{
   return std::atan2(rotation(1, 0), rotation(0, 0));
 }
 

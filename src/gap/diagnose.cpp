@@ -757,13 +757,7 @@ Report diagnose(const Recording& real_in, const sim::Scenario& scenario_in, cons
 
 double sixDigits(double v)
 {
-  if (!std::isfinite(v))
-  {
-    return v;
-  }
-  char buf[40];
-  std::snprintf(buf, sizeof(buf), "%.6g", v);
-  return std::strtod(buf, nullptr);
+  return std::isfinite(v) ? std::strtod(num(v).c_str(), nullptr) : v;
 }
 
 namespace

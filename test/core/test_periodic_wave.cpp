@@ -12,6 +12,8 @@ namespace
 {
 constexpr double kRate = 50.0, kFrequency = 0.125, kAmplitude = 0.8, kMemory = 3.0;
 constexpr double kOmega = 2.0 * M_PI * kFrequency;
+/// The fit's forgetting factor per sample, exp(-dt / kMemory).
+const double kLambda = std::exp(-1.0 / (kRate * kMemory));
 
 double acceleration(double t)
 {
@@ -31,7 +33,7 @@ PeriodicWave lockedWave(int samples, double* last)
   wave.reset(1);
   wave.start(kFrequency, kRate, kMemory, 1, true);
   for (int i = 0; i < samples; ++i)
-    *last = wave.update(acceleration(i / kRate), kFrequency, i ? 1.0 / kRate : 0.0, kRate, kMemory).position;
+    *last = wave.update(acceleration(i / kRate), kFrequency, i ? 1.0 / kRate : 0.0, kRate, kLambda).position;
   return wave;
 }
 }  // namespace
@@ -49,7 +51,7 @@ TEST(PeriodicWave, DescribesTheWaveAfterAPeriod)
   for (int i = 0; i < static_cast<int>(3.0 * kRate / kFrequency); ++i)
   {
     const double t = i * dt;
-    const PeriodicWaveOutput out = wave.update(acceleration(t), kFrequency, i ? dt : 0.0, kRate, kMemory);
+    const PeriodicWaveOutput out = wave.update(acceleration(t), kFrequency, i ? dt : 0.0, kRate, kLambda);
     EXPECT_EQ(out.ready, i + 1 >= kRate / kFrequency) << i;
     if (t > 2.0 / kFrequency)
       worst = std::max(worst, std::abs(out.position - displacement(t)));
@@ -69,7 +71,7 @@ TEST(PeriodicWave, StartsFromItsHistory)
   for (; i < static_cast<int>(30.0 * kRate); ++i)
     wave.push(acceleration(i * dt));
   wave.start(kFrequency, kRate, kMemory, 1, true);
-  const PeriodicWaveOutput out = wave.update(acceleration(i * dt), kFrequency, dt, kRate, kMemory);
+  const PeriodicWaveOutput out = wave.update(acceleration(i * dt), kFrequency, dt, kRate, kLambda);
   ASSERT_TRUE(out.ready);
   EXPECT_NEAR(out.position, displacement(i * dt), 0.01 * kAmplitude / (kOmega * kOmega));
   EXPECT_NEAR(out.residual, 0.0, 0.01 * kAmplitude);
@@ -109,7 +111,7 @@ TEST(PeriodicWave, ALostLockFadesOut)
   fresh.setCapacity(1000);
   fresh.reset(1);
   fresh.start(kFrequency, kRate, kMemory, 1, true);
-  fresh.update(acceleration(0.0), kFrequency, 0.0, kRate, kMemory);
+  fresh.update(acceleration(0.0), kFrequency, 0.0, kRate, kLambda);
   fresh.retire();
   a = x = v = 1.0;
   fresh.fade(dt, &a, &x, &v);

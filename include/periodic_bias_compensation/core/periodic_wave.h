@@ -52,8 +52,9 @@ public:
   void retire();
 
   /// A locked sample: `value` [m/s^2] at `frequency` [Hz] (the lock's, extrapolated to now), dt
-  /// [s] after the previous one, at sample rate `rate` [Hz], with `memory` [s].
-  PeriodicWaveOutput update(double value, double frequency, double dt, double rate, double memory);
+  /// [s] after the previous one, at sample rate `rate` [Hz], with the fit's forgetting factor
+  /// `lambda` = exp(-dt / memory) (the owner weighs its residual variance with it too).
+  PeriodicWaveOutput update(double value, double frequency, double dt, double rate, double lambda);
   /// An unlocked sample: only kept in the history.
   void push(double value)
   {

@@ -25,6 +25,8 @@ namespace periodic_bias_compensation
 /// Heading of an attitude (body -> level frame, z up): the yaw of its x axis about z [rad],
 /// in (-pi, pi].
 double headingOf(const Eigen::Quaterniond& orientation);
+/// The same of an attitude given as its rotation matrix.
+double headingOf(const Eigen::Matrix3d& rotation);
 
 class TurnDetector
 {
