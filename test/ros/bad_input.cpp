@@ -194,7 +194,6 @@ public:
 
 private:
   std::mutex mutex_;
-  ros::Subscriber filtered_, wave_, bias_, diagnostics_, tf_, path_filtered_, path_raw_;
   std::size_t tf_count_ = 0;
   std::size_t path_count_ = 0;
   std::size_t max_path_length_ = 0;
@@ -204,6 +203,8 @@ private:
   double last_stamp_ = 0.0;
   std::map<std::string, std::string> diagnostic_values_;
   std::map<int, std::string> levels_seen_;
+  // Declared last: destroyed first, so no callback in flight outlives the state it writes.
+  ros::Subscriber filtered_, wave_, bias_, diagnostics_, tf_, path_filtered_, path_raw_;
 };
 
 /// Publishes crafted IMU messages and keeps the stamp and the sent count.

@@ -101,8 +101,6 @@ public:
 
 private:
   ros::NodeHandle& nh_;
-  ros::Subscriber diagnostics_;
-  std::vector<ros::Subscriber> subscribers_;
   std::mutex mutex_;
   std::map<std::string, int> level_;
   std::map<std::string, std::string> message_;
@@ -110,6 +108,9 @@ private:
   std::map<std::string, std::map<std::string, std::string>> values_;
   std::map<std::string, std::size_t> odometry_;
   std::map<std::string, int> last_state_;
+  // Declared last: destroyed first, so no callback in flight outlives the state it writes.
+  ros::Subscriber diagnostics_;
+  std::vector<ros::Subscriber> subscribers_;
 };
 
 /// A level IMU at rest, shaken a little on x so that the estimator has something to follow.

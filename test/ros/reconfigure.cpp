@@ -109,10 +109,11 @@ public:
   }
 
 private:
-  ros::Subscriber sub_;
   std::mutex mutex_;
   periodic_bias_compensation::BiasState last_;
   std::size_t count_ = 0;
+  // Declared last: destroyed first, so no callback in flight outlives the state it writes.
+  ros::Subscriber sub_;
 };
 /// Publishers of /rosout known to the master (every node has one), -1 if it cannot be asked.
 int rosoutPublishers()
@@ -192,9 +193,10 @@ public:
   }
 
 private:
-  ros::Subscriber sub_;
   std::mutex mutex_;
   std::vector<rosgraph_msgs::Log> logs_;
+  // Declared last: destroyed first, so no callback in flight outlives the state it writes.
+  ros::Subscriber sub_;
 };
 }  // namespace
 
