@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "../common/test_size.h"
 #include "periodic_bias_compensation/core/compensator.h"
 
 namespace pbc = periodic_bias_compensation;
@@ -419,7 +420,7 @@ TEST(RealWorldStreams, MooredBroadSeaHeave)
   // 6e-4 m/s^2/sqrt(s): heave error under 5 % of Hs with the clean sensor; with the walk, the
   // median at most 4 % and the worst 6 %.
   std::vector<double> walks;
-  for (unsigned seed = 1; seed <= 5; ++seed)
+  for (unsigned seed = 1; seed <= pbc::test::seedsToRun(5); ++seed)
   {
     const double clean = mooredHeaveError(seed, 0.0, 900.0);
     const double walk = mooredHeaveError(seed, 6e-4, 900.0);
@@ -507,7 +508,7 @@ TEST(RealWorldStreams, MooredBroadSeaSurgeAndSway)
   // error of the harmonic model alone (heave_filter off).
   pbc::CompensatorConfig harmonic;
   harmonic.heave_filter = false;
-  for (unsigned seed = 1; seed <= 3; ++seed)
+  for (unsigned seed = 1; seed <= pbc::test::seedsToRun(3); ++seed)
   {
     const auto spectral = mooredSurgeSwayError(seed, 6e-4, pbc::CompensatorConfig());
     const auto alone = mooredSurgeSwayError(seed, 6e-4, harmonic);
@@ -540,12 +541,12 @@ struct HullErrors
   Vector3 wave{ 0, 0, 0 };
 };
 
-/// Seeds and length of the hull runs: 2 and 1200 s here; scripts/bench.py asks for more with
-/// PBC_HULL_SEEDS and PBC_HULL_DURATION [s].
+/// Seeds and length of the hull runs: 2 (one under the sanitizers) and 1200 s here;
+/// scripts/bench.py asks for more with PBC_HULL_SEEDS and PBC_HULL_DURATION [s].
 unsigned hullSeeds()
 {
   const char* value = std::getenv("PBC_HULL_SEEDS");
-  return value ? static_cast<unsigned>(std::max(1, std::atoi(value))) : 2u;
+  return value ? static_cast<unsigned>(std::max(1, std::atoi(value))) : pbc::test::seedsToRun(2);
 }
 double hullDuration()
 {
