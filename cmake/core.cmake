@@ -45,6 +45,7 @@ if(CATKIN_ENABLE_TESTING)
     test/core/test_drift_observer.cpp
     test/core/test_frequency_drift.cpp
     test/core/test_periodic_wave.cpp
+    test/core/test_numeric.cpp
     test/core/test_real_world_streams.cpp)
   target_link_libraries(test_core ${PROJECT_NAME}_core)
   # test_real_world_streams reads ../shared/data beside the repository when it is there.

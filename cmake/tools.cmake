@@ -4,11 +4,10 @@
 add_library(${PROJECT_NAME}_tools src/tools/output_file.cpp)
 target_include_directories(${PROJECT_NAME}_tools PUBLIC include)
 
-# The accuracy of estimates against the simulator's truth (evaluate_compensator's tables), no ROS;
-# its median is the gap library's.
+# The accuracy of estimates against the simulator's truth (evaluate_compensator's tables), no ROS.
 add_library(${PROJECT_NAME}_metrics src/tools/metrics.cpp)
 target_include_directories(${PROJECT_NAME}_metrics PUBLIC include)
-target_link_libraries(${PROJECT_NAME}_metrics PUBLIC ${PROJECT_NAME}_core ${PROJECT_NAME}_sim ${PROJECT_NAME}_gap)
+target_link_libraries(${PROJECT_NAME}_metrics PUBLIC ${PROJECT_NAME}_core ${PROJECT_NAME}_sim)
 
 # Offline tools on the cores (no ROS master); evaluate_compensator reads other estimators' bags.
 add_executable(evaluate_compensator src/tools/evaluate_compensator.cpp)

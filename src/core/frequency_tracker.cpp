@@ -6,6 +6,8 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "periodic_bias_compensation/core/numeric.h"
+
 namespace periodic_bias_compensation
 {
 struct FrequencyTracker::Plan
@@ -197,8 +199,7 @@ FrequencyEstimate FrequencyTracker::analyse(double f_min, double f_max, double m
 
   auto& band = plan_->band_power;
   band.assign(plan_->power.begin() + k_lo, plan_->power.begin() + k_hi + 1);
-  std::nth_element(band.begin(), band.begin() + band.size() / 2, band.end());
-  const double median = band[band.size() / 2];
+  const double median = upperMedian(band.begin(), band.end());
   estimate.peak_ratio = median > 0.0 ? plan_->power[k_peak] / median : 0.0;
 
   // Gaussian (log-parabolic) interpolation: nearly unbiased for a Hann-windowed sinusoid.

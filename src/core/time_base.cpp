@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "periodic_bias_compensation/core/numeric.h"
+
 namespace periodic_bias_compensation
 {
 namespace
@@ -17,12 +19,6 @@ constexpr int kFitInterval = 16;
 /// A step shorter than this many periods is one period: jitter, not a dropped sample [-].
 constexpr double kDropoutSteps = 1.75;
 
-double median(std::vector<double>* values)
-{
-  auto middle = values->begin() + values->size() / 2;
-  std::nth_element(values->begin(), middle, values->end());
-  return *middle;
-}
 }  // namespace
 
 TimeBase::TimeBase(double max_gap) : max_gap_(max_gap), ticks_(kMaxFitSamples), stamps_(kMaxFitSamples)
@@ -138,7 +134,7 @@ void TimeBase::noteStep(double dt)
   recent_count_ = std::min(recent_count_ + 1, kRecentSteps);
   settled_ = settled_ || recent_count_ == kRecentSteps;
   scratch_.assign(recent_.begin(), recent_.begin() + recent_count_);
-  const double typical = median(&scratch_);
+  const double typical = upperMedian(scratch_.begin(), scratch_.end());
   if (period_ <= 0.0 || recent_count_ < kRecentSteps)
   {
     // Until the line fit has enough stamps, the median step is the period.
@@ -243,7 +239,7 @@ void TimeBase::fitPeriod()
   scratch_.clear();
   for (std::size_t k = 0; k < n; ++k)
     scratch_.push_back(std::abs(stamps_[at(k)] - stamp0 - offset - slope * (ticks_[at(k)] - tick0)));
-  const double sigma = 1.4826 * median(&scratch_);
+  const double sigma = 1.4826 * upperMedian(scratch_.begin(), scratch_.end());
   const double threshold = std::max(4.0 * sigma, 1e-3 * period_);
   double refined = slope;
   if (line(threshold, slope, offset, &refined, &offset) && refined > 0.0 &&

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "periodic_bias_compensation/core/numeric.h"
+
 namespace periodic_bias_compensation
 {
 double headingOf(const Eigen::Quaterniond& orientation)
@@ -36,7 +38,7 @@ void TurnDetector::followHeading(double heading, double dt)
     heading_ = heading_mean_ = record_heading_ = heading;
     return;
   }
-  heading_ += std::remainder(heading - heading_, 2.0 * M_PI);
+  heading_ += wrapAngle(heading - heading_);
   const double weight =
       std::max(dt > 0.0 ? 1.0 - std::exp(-dt / kHeadingAveraging) : 0.0, 1.0 / static_cast<double>(heading_samples_));
   heading_mean_ += weight * (heading_ - heading_mean_);

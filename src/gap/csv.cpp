@@ -8,6 +8,8 @@
 #include <sstream>
 #include <vector>
 
+#include "periodic_bias_compensation/core/numeric.h"
+
 namespace periodic_bias_compensation::gap
 {
 namespace

@@ -11,6 +11,7 @@
 
 #include <Eigen/Dense>
 
+#include "periodic_bias_compensation/core/numeric.h"
 #include "periodic_bias_compensation/gap/gap.h"
 #include "periodic_bias_compensation/sim/effects.h"
 
@@ -45,14 +46,10 @@ double stdOf(const Vec& v)
   return std::sqrt(s / (v.size() - 1));
 }
 
+/// The upper median (0 when empty).
 double medianOf(Vec v)
 {
-  if (v.empty())
-  {
-    return 0.0;
-  }
-  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-  return v[v.size() / 2];
+  return v.empty() ? 0.0 : upperMedian(v.begin(), v.end());
 }
 
 /// The parameters of an effect: a number, or a list for vector parameters.
@@ -529,18 +526,6 @@ Candidate make(const std::string& name, std::vector<sim::EffectSpec> specs, cons
   return c;
 }
 
-double wrapAngle(double a)
-{
-  while (a > M_PI)
-  {
-    a -= 2 * M_PI;
-  }
-  while (a < -M_PI)
-  {
-    a += 2 * M_PI;
-  }
-  return a;
-}
 /// Allan variance of the recording against the ensemble, per channel: at the sample taus shorter
 /// than a block, then at the long taus of 32 block means of (recording - ensemble mean of the
 /// other runs), which takes a motion common to the runs out of the long-tau Allan variance.

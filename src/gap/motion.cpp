@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "periodic_bias_compensation/core/numeric.h"
 #include "periodic_bias_compensation/gap/gap.h"
 
 namespace periodic_bias_compensation::gap
@@ -24,11 +25,6 @@ constexpr double kSeaTolerance = 0.15;
 /// A standing tilt or heading differs beyond this and three ensemble spreads [rad].
 constexpr double kAngleTolerance = 0.005;
 constexpr double kHeadingTolerance = 0.05;
-
-double wrap(double angle)
-{
-  return std::atan2(std::sin(angle), std::cos(angle));
-}
 
 struct Spread
 {
@@ -168,12 +164,12 @@ MotionFit fitMotion(const Recording& real, const sim::Scenario& scenario, const 
     const Spread heading =
         spreadOf(sims, [](const MotionSummary& m) { return std::isfinite(m.heading) ? m.heading : 0.0; });
     fit.scenario.heading = heading.mean;
-    const double turn = wrap(fit.real.heading - heading.mean);
+    const double turn = wrapAngle(fit.real.heading - heading.mean);
     if (std::abs(turn) > std::max(kHeadingTolerance, 3.0 * heading.sd) &&
         scenario.motion.type != sim::MotionType::kRoute)
     {
       fit.findings.push_back(format("heading %+.3f rad against %+.3f in the scenario", fit.real.heading, heading.mean));
-      attitude.motion.heading = wrap(attitude.motion.heading + turn);
+      attitude.motion.heading = wrapAngle(attitude.motion.heading + turn);
       attitude_differs = true;
     }
   }

@@ -10,6 +10,7 @@
 #include <stdexcept>
 #include <thread>
 
+#include "periodic_bias_compensation/core/numeric.h"
 #include "periodic_bias_compensation/gap/gap.h"
 #include "periodic_bias_compensation/sim/simulator.h"
 
@@ -374,21 +375,6 @@ double repeatedFraction(const Eigen::MatrixXd& data)
   return static_cast<double>(repeated) / (data.rows() - 1);
 }
 
-double median(std::vector<double> v)
-{
-  if (v.empty())
-  {
-    return std::nan("");
-  }
-  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-  double m = v[v.size() / 2];
-  if (v.size() % 2 == 0)
-  {
-    m = 0.5 * (m + *std::max_element(v.begin(), v.begin() + v.size() / 2));
-  }
-  return m;
-}
-
 double estimateRate(const Recording& recording)
 {
   const std::size_t n = recording.size();
@@ -448,14 +434,12 @@ StampStats stampStats(const std::vector<double>& stamp, double rate)
     r[i] = stamp[i] - (a + b * k[i]);
   }
   std::vector<double> ar = r;
-  std::nth_element(ar.begin(), ar.begin() + n / 2, ar.end());
-  const double med = ar[n / 2];
+  const double med = upperMedian(ar.begin(), ar.end());
   for (double& v : ar)
   {
     v = std::abs(v - med);
   }
-  std::nth_element(ar.begin(), ar.begin() + n / 2, ar.end());
-  s.jitter = 1.4826 * ar[n / 2];
+  s.jitter = 1.4826 * upperMedian(ar.begin(), ar.end());
   double missing = 0.0;
   for (std::size_t i = 1; i < n; ++i)
   {

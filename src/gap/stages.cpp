@@ -6,6 +6,7 @@
 #include <cstdio>
 
 #include "periodic_bias_compensation/core/compensator.h"
+#include "periodic_bias_compensation/core/numeric.h"
 #include "periodic_bias_compensation/gap/gap.h"
 
 namespace periodic_bias_compensation::gap
@@ -116,8 +117,7 @@ std::vector<double> stageFeatures(const Recording& r, int segments)
           case 1:
             if (!fr.empty())
             {
-              std::nth_element(fr.begin(), fr.begin() + fr.size() / 2, fr.end());
-              v = fr[fr.size() / 2];
+              v = upperMedian(fr.begin(), fr.end());
             }
             break;
           case 2:

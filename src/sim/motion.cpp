@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 
+#include "periodic_bias_compensation/core/numeric.h"
 #include "periodic_bias_compensation/sim/random.h"
 
 namespace periodic_bias_compensation::sim
@@ -12,11 +13,6 @@ namespace
 {
 constexpr double kTwoPi = 2.0 * M_PI;
 constexpr std::int64_t kBlock = 512;  // samples per cached sea block
-
-double wrapAngle(double a)
-{
-  return std::remainder(a, kTwoPi);
-}
 
 // Value and first two derivatives with respect to mu of a DOF's directional gain.
 struct Gain

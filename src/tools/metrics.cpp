@@ -4,7 +4,7 @@
 #include <cmath>
 #include <limits>
 
-#include "periodic_bias_compensation/gap/gap.h"
+#include "periodic_bias_compensation/core/numeric.h"
 
 namespace periodic_bias_compensation::metrics
 {
@@ -166,6 +166,6 @@ double percentile(std::vector<double> values, double share)
 double median(std::vector<double> values)
 {
   values.erase(std::remove_if(values.begin(), values.end(), [](double v) { return !std::isfinite(v); }), values.end());
-  return gap::median(std::move(values));
+  return periodic_bias_compensation::median(std::move(values));
 }
 }  // namespace periodic_bias_compensation::metrics

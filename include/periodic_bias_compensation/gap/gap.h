@@ -61,9 +61,6 @@ struct Recording
   }
 };
 
-/// Median of the values (the mean of the two middle ones for an even count; NaN when empty).
-double median(std::vector<double> values);
-
 /// Median sample rate from the stamps [Hz] (0 with fewer than 2 samples).
 double estimateRate(const Recording& recording);
 
