@@ -19,7 +19,8 @@ add_library(${PROJECT_NAME}_core
   src/core/calibration_window.cpp
   src/core/drift_observer.cpp
   src/core/frequency_drift.cpp
-  src/core/periodic_wave.cpp)
+  src/core/periodic_wave.cpp
+  src/core/raw_integrator.cpp)
 target_include_directories(${PROJECT_NAME}_core PUBLIC include)
 target_link_libraries(${PROJECT_NAME}_core PUBLIC Eigen3::Eigen PkgConfig::FFTW3 yaml-cpp)
 
@@ -46,6 +47,7 @@ if(CATKIN_ENABLE_TESTING)
     test/core/test_frequency_drift.cpp
     test/core/test_periodic_wave.cpp
     test/core/test_numeric.cpp
+    test/core/test_raw_integrator.cpp
     test/core/test_real_world_streams.cpp)
   target_link_libraries(test_core ${PROJECT_NAME}_core)
   # test_real_world_streams reads ../shared/data beside the repository when it is there.

@@ -13,7 +13,6 @@ target_link_libraries(${PROJECT_NAME}_parameters ${PROJECT_NAME}_core ${catkin_L
 # and the bag check of the offline tools.
 add_library(${PROJECT_NAME}_ros
   src/ros/conversions.cpp
-  src/ros/raw_integrator.cpp
   src/ros/mounting.cpp
   src/ros/bag_check.cpp
   src/ros/compensator_ros.cpp

@@ -5,6 +5,7 @@
 #include <limits>
 
 #include "periodic_bias_compensation/core/numeric.h"
+#include "periodic_bias_compensation/core/raw_integrator.h"
 
 namespace periodic_bias_compensation::metrics
 {
@@ -143,15 +144,14 @@ Errors highPassBaseline(const std::vector<sim::Sample>& samples, double gravity,
 Errors integrateRaw(const std::vector<sim::Sample>& samples, double gravity)
 {
   Scorer scorer(samples.front(), std::numeric_limits<double>::infinity());
-  Vector3 v = Vector3::Zero(), p = Vector3::Zero();
-  for (std::size_t k = 1; k < samples.size(); ++k)
+  RawIntegrator raw;
+  for (std::size_t k = 0; k < samples.size(); ++k)
   {
-    const double dt = samples[k].stamp - samples[k - 1].stamp;
-    v += (samples[k].orientation * samples[k].accel - Vector3(0, 0, gravity)) * dt;
-    p += v * dt;
-    scorer.add(samples[k], p, Vector3::Zero());
+    raw.add(samples[k].stamp, samples[k].orientation * samples[k].accel - Vector3(0, 0, gravity), false);
+    if (k > 0)
+      scorer.add(samples[k], raw.position(), Vector3::Zero());
   }
-  return scorer.finish(samples.back(), p, Vector3::Zero());
+  return scorer.finish(samples.back(), raw.position(), Vector3::Zero());
 }
 
 double percentile(std::vector<double> values, double share)

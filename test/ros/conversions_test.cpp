@@ -20,7 +20,6 @@
 #include "periodic_bias_compensation/ros/mounting.h"
 #include "periodic_bias_compensation/ros/parameter_reference.h"
 #include "periodic_bias_compensation/ros/parameters.h"
-#include "periodic_bias_compensation/ros/raw_integrator.h"
 
 using namespace periodic_bias_compensation;
 using Tuning = periodic_bias_compensation_cfg::CompensatorConfig;
@@ -461,22 +460,6 @@ TEST(Parameters, GeneratedTextIsCurrent)
   ASSERT_TRUE(replaceSection("intro\n" + docs.begin_marker + "\nold\n" + docs.end_marker + "\nrest\n", docs, &updated));
   EXPECT_EQ(updated, "intro\n" + docs.begin_marker + "\n" + docs.generate() + docs.end_marker + "\nrest\n");
   EXPECT_FALSE(replaceSection("no markers\n", docs, &updated));
-}
-
-TEST(RawIntegrator, ConstantAccelerationAndRestarts)
-{
-  RawIntegrator raw;
-  const Vector3 a(0.2, 0.0, 0.0);
-  for (int i = 0; i <= 100; ++i)
-  {
-    raw.add(0.01 * i, a, false);
-  }
-  EXPECT_NEAR(raw.position().x(), 0.5 * 0.2 * 1.0 * 1.0, 1e-9);
-  const double before_gap = raw.position().x();
-  raw.add(5.0, a, true);  // after a gap: no integration across it
-  EXPECT_DOUBLE_EQ(raw.position().x(), before_gap);
-  raw.reset();
-  EXPECT_DOUBLE_EQ(raw.position().norm(), 0.0);
 }
 
 int main(int argc, char** argv)

@@ -21,9 +21,9 @@
 
 #include "periodic_bias_compensation/CompensatorConfig.h"
 #include "periodic_bias_compensation/core/compensator.h"
+#include "periodic_bias_compensation/core/raw_integrator.h"
 #include "periodic_bias_compensation/ros/conversions.h"
 #include "periodic_bias_compensation/ros/parameters.h"
-#include "periodic_bias_compensation/ros/raw_integrator.h"
 
 namespace periodic_bias_compensation
 {

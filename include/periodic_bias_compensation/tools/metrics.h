@@ -131,10 +131,9 @@ private:
 /// about zero: compared as the wave motion, its slow motion is zero. RMS errors from `settle` [s].
 Errors highPassBaseline(const std::vector<sim::Sample>& samples, double gravity, double settle);
 
-/// Plain double integration of the level, gravity-free acceleration (no compensation): velocity,
-/// then position, by one rectangle step per sample (v += a dt, then p += v dt). Its position is
-/// slow and wave motion at once: scored as the slow motion at the checkpoints and the end only
-/// (the RMS and wave errors are NaN).
+/// Plain double integration of the level, gravity-free acceleration (no compensation), by the
+/// node's RawIntegrator (trapezoidal). Its position is slow and wave motion at once: scored as the
+/// slow motion at the checkpoints and the end only (the RMS and wave errors are NaN).
 Errors integrateRaw(const std::vector<sim::Sample>& samples, double gravity);
 
 /// Value below which `share` (0..1) of `values` lie, nearest rank: the element of rank

@@ -1,5 +1,6 @@
-// Plain double integration of the gravity-free level acceleration (constant bias removed,
-// nothing else): the "raw" track shown next to the compensated one in rviz.
+// Plain double integration of a gravity-free level acceleration (estimation core, no ROS): the
+// "raw" track the node shows next to the compensated one in rviz (its input has the constant
+// bias removed, nothing else), and the benchmark's "raw" method (nothing removed).
 #pragma once
 
 #include "periodic_bias_compensation/core/compensator.h"

@@ -1,4 +1,4 @@
-#include "periodic_bias_compensation/ros/raw_integrator.h"
+#include "periodic_bias_compensation/core/raw_integrator.h"
 
 namespace periodic_bias_compensation
 {
