@@ -6,7 +6,7 @@
 #include <cmath>
 #include <stdexcept>
 
-#include "periodic_bias_compensation/core/numeric.h"
+#include "periodic_bias_compensation/common/numeric.h"
 
 namespace periodic_bias_compensation
 {

@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "periodic_bias_compensation/core/numeric.h"
+#include "periodic_bias_compensation/common/numeric.h"
 
 namespace periodic_bias_compensation
 {

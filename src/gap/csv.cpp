@@ -8,7 +8,7 @@
 #include <sstream>
 #include <vector>
 
-#include "periodic_bias_compensation/core/numeric.h"
+#include "periodic_bias_compensation/common/numeric.h"
 
 namespace periodic_bias_compensation::gap
 {

@@ -3,7 +3,7 @@
 #include <cmath>
 #include <cstdio>
 
-#include "periodic_bias_compensation/core/numeric.h"
+#include "periodic_bias_compensation/common/numeric.h"
 #include "periodic_bias_compensation/gap/gap.h"
 
 namespace periodic_bias_compensation::gap

@@ -11,7 +11,7 @@
 
 #include <Eigen/Dense>
 
-#include "periodic_bias_compensation/core/numeric.h"
+#include "periodic_bias_compensation/common/numeric.h"
 #include "periodic_bias_compensation/gap/gap.h"
 #include "periodic_bias_compensation/sim/effects.h"
 

@@ -10,7 +10,7 @@
 #include <stdexcept>
 #include <thread>
 
-#include "periodic_bias_compensation/core/numeric.h"
+#include "periodic_bias_compensation/common/numeric.h"
 #include "periodic_bias_compensation/gap/gap.h"
 #include "periodic_bias_compensation/sim/simulator.h"
 

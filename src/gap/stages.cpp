@@ -5,8 +5,8 @@
 #include <cmath>
 #include <cstdio>
 
+#include "periodic_bias_compensation/common/numeric.h"
 #include "periodic_bias_compensation/core/compensator.h"
-#include "periodic_bias_compensation/core/numeric.h"
 #include "periodic_bias_compensation/gap/gap.h"
 
 namespace periodic_bias_compensation::gap

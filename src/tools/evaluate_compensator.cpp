@@ -28,9 +28,9 @@
 
 #include "periodic_bias_compensation/core/compensator.h"
 #include "periodic_bias_compensation/core/gain_tuning.h"
-#include "periodic_bias_compensation/sim/core_sample.h"
 #include "periodic_bias_compensation/sim/simulator.h"
 #include "periodic_bias_compensation/tools/command_line.h"
+#include "periodic_bias_compensation/tools/core_sample.h"
 #include "periodic_bias_compensation/tools/metrics.h"
 #include "periodic_bias_compensation/tools/output_file.h"
 
@@ -154,7 +154,7 @@ metrics::Errors evaluate(const std::vector<sim::Sample>& samples, double rate, c
   std::optional<pbc::Quaternion> turn;
   for (const auto& s : samples)
   {
-    pbc::ImuSample imu = sim::toImuSample(s);
+    pbc::ImuSample imu = pbc::toImuSample(s);
     imu.has_orientation = orientation == Orientation::kGiven;
     if (pbc::producedOutput(compensator.addSample(imu, &out)) && orientation == Orientation::kWithheld)
     {
@@ -281,7 +281,7 @@ Vector3 staticBias(const std::string& calibration_scenario)
   config.calibration_duration = rest.duration - 1.5 / rest.rate;
   pbc::Compensator calibration(config);
   for (const auto& s : simulate(rest, 1000))
-    calibration.addSample(sim::toImuSample(s), nullptr);
+    calibration.addSample(pbc::toImuSample(s), nullptr);
   if (!calibration.calibrated())
     throw std::runtime_error("the calibration scenario did not complete a calibration window");
   const Vector3 bias = calibration.constantBias();
@@ -339,7 +339,7 @@ PaperConfigs tunePaper(const sim::Scenario& scenario, const std::optional<Vector
   }
   std::vector<pbc::ImuSample> training;
   for (const auto& s : training_run)
-    training.push_back(sim::toImuSample(s));
+    training.push_back(pbc::toImuSample(s));
   const pbc::GainTuningResult tuning =
       pbc::tunePaperGains(training, configs.paper, calibrated_bias, settle, {}, 2, [](int done, int total) {
         std::cerr << "\rtuning paper gains on seed " << kTrainingSeed << ": run " << done << "/" << total << std::flush;

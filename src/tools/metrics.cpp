@@ -4,7 +4,7 @@
 #include <cmath>
 #include <limits>
 
-#include "periodic_bias_compensation/core/numeric.h"
+#include "periodic_bias_compensation/common/numeric.h"
 #include "periodic_bias_compensation/core/raw_integrator.h"
 
 namespace periodic_bias_compensation::metrics

@@ -9,8 +9,8 @@
 
 #include "periodic_bias_compensation/core/compensator.h"
 #include "periodic_bias_compensation/core/frequency_tracker.h"
-#include "periodic_bias_compensation/sim/core_sample.h"
 #include "periodic_bias_compensation/sim/simulator.h"
+#include "periodic_bias_compensation/tools/core_sample.h"
 
 namespace pbc = periodic_bias_compensation;
 namespace sim = periodic_bias_compensation::sim;
@@ -31,7 +31,7 @@ const std::vector<pbc::ImuSample>& samples(const std::string& scenario_name)
   {
     if (s.dropped)
       continue;
-    out.push_back(sim::toImuSample(s));
+    out.push_back(pbc::toImuSample(s));
   }
   return cache.emplace(scenario_name, std::move(out)).first->second;
 }

@@ -4,7 +4,7 @@
 #include <cmath>
 #include <vector>
 
-#include "periodic_bias_compensation/core/numeric.h"
+#include "periodic_bias_compensation/common/numeric.h"
 
 namespace pbc = periodic_bias_compensation;
 

@@ -24,9 +24,9 @@
 #include <gtest/gtest.h>
 
 #include "periodic_bias_compensation/core/compensator.h"
-#include "periodic_bias_compensation/sim/core_sample.h"
 #include "periodic_bias_compensation/sim/scenario.h"
 #include "periodic_bias_compensation/sim/simulator.h"
+#include "periodic_bias_compensation/tools/core_sample.h"
 
 namespace pbc = periodic_bias_compensation;
 namespace sim = periodic_bias_compensation::sim;
@@ -76,7 +76,7 @@ Record simulate(const std::string& name, double duration = -1.0, double start_ti
     {
       continue;
     }
-    record.samples.push_back(sim::toImuSample(s));
+    record.samples.push_back(pbc::toImuSample(s));
     record.truth.push_back(s);
   }
   return record;
@@ -407,7 +407,7 @@ TEST(Reliability, LongRunMemoryAndCostFlatOutputsBounded)
       {
         continue;
       }
-      block.push_back(sim::toImuSample(s));
+      block.push_back(pbc::toImuSample(s));
       truth.push_back(s);
     }
     if (block.empty())

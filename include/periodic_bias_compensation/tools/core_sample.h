@@ -1,14 +1,15 @@
-// The simulator's sample as the estimation core takes it. Header only, so that neither library
-// links the other.
+// The simulator's sample as the estimation core takes it: the bridge the offline tools, the
+// benchmarks and the tests that feed simulated data to the core use. Header only, and outside
+// both libraries, so that neither includes or links the other.
 #pragma once
 
 #include "periodic_bias_compensation/core/compensator.h"
 #include "periodic_bias_compensation/sim/types.h"
 
-namespace periodic_bias_compensation::sim
+namespace periodic_bias_compensation
 {
 /// The reported stamp, specific force, angular rate and orientation (sensor -> ENU, REP-145).
-inline ImuSample toImuSample(const Sample& s)
+inline ImuSample toImuSample(const sim::Sample& s)
 {
   ImuSample imu;
   imu.t = s.stamp;
@@ -18,4 +19,4 @@ inline ImuSample toImuSample(const Sample& s)
   imu.orientation = s.orientation;
   return imu;
 }
-}  // namespace periodic_bias_compensation::sim
+}  // namespace periodic_bias_compensation

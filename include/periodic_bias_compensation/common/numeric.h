@@ -1,5 +1,6 @@
-// Small numeric helpers shared by the core, the simulator, the gap diagnosis and the tools
-// (header only, no allocation beyond the caller's vector).
+// Small numeric helpers shared by every layer: the core, the simulator, the gap diagnosis and the
+// tools. Header only and standard library only, below both cores (no allocation beyond the
+// caller's vector).
 #pragma once
 
 #include <algorithm>
