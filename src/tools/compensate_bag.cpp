@@ -207,9 +207,23 @@ struct ReadBatch
     std::uint32_t size = 0;
   };
   std::vector<Message> messages;
-  std::vector<std::uint8_t> bytes;
+  std::vector<std::uint8_t> bytes;  ///< the first `used` hold the messages' bytes
+  std::size_t used = 0;
   std::exception_ptr error;  ///< what stopped the reading, after `messages`
   bool last = false;         ///< no batch follows
+
+  /// Room for `size` more bytes. `bytes` only grows, so that a batch used again is not filled
+  /// with zeros again (as resizing it from empty each time would).
+  std::uint8_t* addBytes(std::size_t size)
+  {
+    if (bytes.size() < used + size)
+    {
+      bytes.resize(std::max(2 * bytes.size(), used + size));
+    }
+    std::uint8_t* room = bytes.data() + used;
+    used += size;
+    return room;
+  }
 };
 
 /// Reads a rosbag::View in a thread of its own, a few batches ahead of the caller, so that
@@ -258,7 +272,7 @@ public:
   void recycle(std::unique_ptr<ReadBatch> batch)
   {
     batch->messages.clear();
-    batch->bytes.clear();
+    batch->used = 0;
     {
       std::lock_guard<std::mutex> lock(mutex_);
       free_.push_back(std::move(batch));
@@ -550,10 +564,9 @@ private:
     }
     else
     {
-      message.offset = batch->bytes.size();
+      message.offset = batch->used;
       message.size = m.size();
-      batch->bytes.resize(message.offset + message.size);
-      ros::serialization::OStream stream(batch->bytes.data() + message.offset, message.size);
+      ros::serialization::OStream stream(batch->addBytes(message.size), message.size);
       m.write(stream);
     }
     batch->messages.push_back(std::move(message));
