@@ -349,6 +349,13 @@ private:
   bool stopping_ = false;
 };
 
+/// IN is truncated or corrupt (`what`: as rosbag says it), after `received` IMU messages.
+std::string corruptInputMessage(const Options& options, const std::string& what, std::uint64_t received)
+{
+  return corruptBagMessage(options.in, what) + " Nothing was written to " + options.out +
+         (received > 0 ? " (" + std::to_string(received) + " IMU messages had been read)" : std::string());
+}
+
 /// Writes the outputs of one bag; the caller owns the temporary file.
 class BagCompensator
 {
@@ -411,15 +418,13 @@ public:
 
   std::string corruptMessage(const std::string& what) const
   {
-    return corruptBagMessage(options_.in, what) + " Nothing was written to " + options_.out +
-           (received_ > 0 ? " (" + std::to_string(received_) + " IMU messages had been read)" : std::string());
+    return corruptInputMessage(options_, what, received_);
   }
 
-  /// IN has passed checkBagStructure (bagFileProblem); *bag, not yet open, is to read it with.
+  /// IN has passed checkBagStructure (bagFileProblem) and is open in *bag (openInput).
   void runUnchecked(rosbag::Bag* bag, const std::string& temp_path)
   {
     rosbag::Bag& in = *bag;
-    in.open(options_.in, rosbag::bagmode::Read);
     const std::string imu_topic = absoluteTopic(options_.imu_topic);
 
     rosbag::View all(in);
@@ -799,18 +804,41 @@ private:
   std::optional<std::uint32_t> filtered_connection_, wave_connection_, bias_connection_;  ///< in OUT
 };
 
-/// Checks the input exists and that rosbag can read it safely (bag_check.h), and returns the
-/// rosbag::Bag to open it with, not yet open. The check reads the whole file while the bag's
-/// constructor loads rosbag's encryption plugins (a walk of the ROS package path): neither needs
-/// the other, so they run side by side.
-std::unique_ptr<rosbag::Bag> checkInput(const Options& options)
+/// IN, checked and open: it exists and rosbag can read it safely (bagFileProblem, which reads the
+/// whole file). rosbag::Bag::open reads only the records around the chunks, which
+/// bagOpenProblem checks first without reading the chunks, so rosbag opens the bag (and, before
+/// that, the bag's constructor loads rosbag's encryption plugins, a walk of the ROS package path)
+/// while the whole-file check runs in a thread. No message is read before that check has passed,
+/// and its message is the one given for a bag it refuses, as when it ran alone.
+std::unique_ptr<rosbag::Bag> openInput(const Options& options)
 {
   std::future<std::string> problem = std::async(std::launch::async, bagFileProblem, options.in);
   auto bag = std::make_unique<rosbag::Bag>();
+  const std::string open_problem = bagOpenProblem(options.in);
+  std::string open_error;
+  if (open_problem.empty())
+  {
+    try
+    {
+      bag->open(options.in, rosbag::bagmode::Read);
+    }
+    catch (const rosbag::BagException& e)
+    {
+      open_error = e.what();
+    }
+  }
   const std::string why = problem.get();
   if (!why.empty())
   {
     throw std::runtime_error(why);
+  }
+  if (!open_problem.empty())
+  {
+    throw std::runtime_error(open_problem);  // not expected: bagFileProblem checks all it does
+  }
+  if (!open_error.empty())
+  {
+    throw std::runtime_error(corruptInputMessage(options, open_error, 0));
   }
   return bag;
 }
@@ -827,7 +855,7 @@ int compensateBagMain(int argc, char** argv)
     if (!parsed)
       return 0;
     options = *parsed;
-    const std::unique_ptr<rosbag::Bag> in = checkInput(options);
+    const std::unique_ptr<rosbag::Bag> in = openInput(options);
     const Parameters params = loadParameters(options);
     // Both outputs are created (as temporaries) before the bag is read: one that cannot be
     // written is said at once.
