@@ -260,9 +260,9 @@ std::string checkIndex(const RecordFields& fields, const std::string& data, std:
   return std::string();
 }
 
-}  // namespace
-
-std::string checkBagStructure(const std::string& path)
+/// checkBagStructure; without `read_chunks`, the chunks' contents are skipped (not walked, not
+/// decompressed; index entries only checked against the chunk's size).
+std::string checkStructure(const std::string& path, bool read_chunks)
 {
   std::ifstream file(path, std::ios::binary);
   static const std::string kMagic = "#ROSBAG V2.0\n";
@@ -330,8 +330,9 @@ std::string checkBagStructure(const std::string& path)
     {
       chunk_positions.emplace_back(record, u64(fields.chunk_pos).value_or(0));
     }
-    const bool walk_chunk = op == kOpChunk && fields.compression == "none";
-    const bool compressed_chunk = op == kOpChunk && (fields.compression == "lz4" || fields.compression == "bz2");
+    const bool walk_chunk = read_chunks && op == kOpChunk && fields.compression == "none";
+    const bool compressed_chunk =
+        read_chunks && op == kOpChunk && (fields.compression == "lz4" || fields.compression == "bz2");
     std::string data;
     if (op == kOpConnection || op == kOpIndexData || walk_chunk || compressed_chunk)
     {
@@ -379,14 +380,8 @@ std::string checkBagStructure(const std::string& path)
   return checkOffsets(file_header, records, chunk_positions);
 }
 
-std::string corruptBagMessage(const std::string& path, const std::string& what)
-{
-  return "input bag '" + path + "' is truncated or corrupt (" + what +
-         "); a bag cut off while recording has no index: 'rosbag reindex " + path +
-         "' recovers the messages written before the cut.";
-}
-
-std::string bagFileProblem(const std::string& path)
+/// bagFileProblem; `read_chunks` as for checkStructure.
+std::string bagProblem(const std::string& path, bool read_chunks)
 {
   std::error_code ec;
   const std::filesystem::file_status status = std::filesystem::status(path, ec);
@@ -402,7 +397,30 @@ std::string bagFileProblem(const std::string& path)
   {
     return "input bag '" + path + "' is empty (0 bytes)";
   }
-  const std::string structure = checkBagStructure(path);
+  const std::string structure = checkStructure(path, read_chunks);
   return structure.empty() ? std::string() : corruptBagMessage(path, structure);
+}
+}  // namespace
+
+std::string checkBagStructure(const std::string& path)
+{
+  return checkStructure(path, true);
+}
+
+std::string corruptBagMessage(const std::string& path, const std::string& what)
+{
+  return "input bag '" + path + "' is truncated or corrupt (" + what +
+         "); a bag cut off while recording has no index: 'rosbag reindex " + path +
+         "' recovers the messages written before the cut.";
+}
+
+std::string bagFileProblem(const std::string& path)
+{
+  return bagProblem(path, true);
+}
+
+std::string bagOpenProblem(const std::string& path)
+{
+  return bagProblem(path, false);
 }
 }  // namespace periodic_bias_compensation

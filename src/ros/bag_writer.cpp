@@ -216,6 +216,16 @@ void BagWriter::write(std::uint32_t connection, const ros::Time& time, const ros
   endMessage();
 }
 
+void BagWriter::write(std::uint32_t connection, const ros::Time& time, const std::uint8_t* data, std::uint32_t size)
+{
+  std::uint8_t* target = beginMessage(connection, time, size);
+  if (size > 0)
+  {
+    std::memcpy(target, data, size);
+  }
+  endMessage();
+}
+
 void BagWriter::finishChunk()
 {
   if (chunk_.messages == 0)

@@ -7,24 +7,38 @@
 //                  [--imu-topic imu/data] [--outputs filtered,wave,bias,ground_truth]
 //                  [--compression none|lz4|bz2]
 //
+// IN is read and deserialised by a thread of its own, a few hundred messages ahead of the core,
+// and OUT's chunks are written by another (ros/bag_writer.h): on a machine with a free core the
+// run takes about as long as its slowest part instead of the sum of all three.
+//
 // The outputs are written to temporary files next to them and renamed when complete, so a
 // failure or a signal never leaves a partial OUT behind; an input is never overwritten
 // (tools/output_file.h). Exit status: 0 success, 1 error, 2 wrong command line.
 #include <algorithm>
 #include <chrono>
 #include <cinttypes>
+#include <condition_variable>
 #include <cstdint>
 #include <cstdio>
+#include <deque>
+#include <exception>
 #include <filesystem>
+#include <functional>
+#include <future>
 #include <iostream>
 #include <map>
+#include <memory>
+#include <mutex>
 #include <optional>
 #include <set>
 #include <stdexcept>
 #include <string>
+#include <thread>
+#include <utility>
 #include <vector>
 
 #include <ros/exception.h>
+#include <ros/serialization.h>
 #include <rosbag/bag.h>
 #include <rosbag/exceptions.h>
 #include <rosbag/view.h>
@@ -180,6 +194,168 @@ Parameters loadParameters(const Options& options)
   return params;
 }
 
+/// Consecutive messages of IN as the reading thread hands them on: an IMU message deserialised,
+/// any other as its serialised bytes (copied out: rosbag reuses its read buffer).
+struct ReadBatch
+{
+  struct Message
+  {
+    ros::Time time;                  ///< in the bag
+    std::size_t connection = 0;      ///< index in the caller's table of IN's connections
+    sensor_msgs::Imu::ConstPtr imu;  ///< set for an IMU message; else its bytes are in `bytes`
+    std::size_t offset = 0;          ///< of its bytes in `bytes`
+    std::uint32_t size = 0;
+  };
+  std::vector<Message> messages;
+  std::vector<std::uint8_t> bytes;  ///< the first `used` hold the messages' bytes
+  std::size_t used = 0;
+  std::exception_ptr error;  ///< what stopped the reading, after `messages`
+  bool last = false;         ///< no batch follows
+
+  /// Room for `size` more bytes. `bytes` only grows, so that a batch used again is not filled
+  /// with zeros again (as resizing it from empty each time would).
+  std::uint8_t* addBytes(std::size_t size)
+  {
+    if (bytes.size() < used + size)
+    {
+      bytes.resize(std::max(2 * bytes.size(), used + size));
+    }
+    std::uint8_t* room = bytes.data() + used;
+    used += size;
+    return room;
+  }
+};
+
+/// Reads a rosbag::View in a thread of its own, a few batches ahead of the caller, so that
+/// rosbag's reading and deserialising overlap the core and the writing instead of adding to
+/// them. The bag is used by that thread alone until the ReadAhead is destroyed. An exception
+/// while reading comes with the batch of the messages read before it, so the caller throws it
+/// after handling those, where a single loop would have thrown it.
+class ReadAhead
+{
+public:
+  /// Reads one message into the batch (in the reading thread).
+  using ReadOne = std::function<void(const rosbag::MessageInstance&, ReadBatch*)>;
+
+  ReadAhead(rosbag::View* view, ReadOne read_one) : view_(view), read_one_(std::move(read_one))
+  {
+    for (int i = 0; i < kBatches; ++i)
+    {
+      free_.push_back(std::make_unique<ReadBatch>());
+    }
+    thread_ = std::thread([this] { run(); });
+  }
+
+  /// Stops the reading (the caller may stop early, on an error) and waits for the thread.
+  ~ReadAhead()
+  {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      stopping_ = true;
+    }
+    changed_.notify_all();
+    thread_.join();
+  }
+  ReadAhead(const ReadAhead&) = delete;
+  ReadAhead& operator=(const ReadAhead&) = delete;
+
+  /// The next batch, once read; give it back with recycle() when done with it.
+  std::unique_ptr<ReadBatch> next()
+  {
+    std::unique_lock<std::mutex> lock(mutex_);
+    changed_.wait(lock, [this] { return !full_.empty(); });
+    std::unique_ptr<ReadBatch> batch = std::move(full_.front());
+    full_.pop_front();
+    return batch;
+  }
+
+  void recycle(std::unique_ptr<ReadBatch> batch)
+  {
+    batch->messages.clear();
+    batch->used = 0;
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      free_.push_back(std::move(batch));
+    }
+    changed_.notify_all();
+  }
+
+private:
+  // Batches in flight bound the memory read ahead; a batch amortises the hand-over.
+  static constexpr int kBatches = 4;
+  static constexpr std::size_t kBatchMessages = 256;
+
+  void run()
+  {
+    std::unique_ptr<ReadBatch> batch = take();
+    if (!batch)
+    {
+      return;
+    }
+    try
+    {
+      for (const rosbag::MessageInstance& m : *view_)
+      {
+        read_one_(m, batch.get());
+        if (batch->messages.size() == kBatchMessages)
+        {
+          hand(std::move(batch));
+          batch = take();
+          if (!batch)
+          {
+            return;  // the caller stopped
+          }
+        }
+      }
+    }
+    catch (...)
+    {
+      batch->error = std::current_exception();
+    }
+    batch->last = true;
+    hand(std::move(batch));
+  }
+
+  /// A free batch to fill, waiting for one; nothing once stopping.
+  std::unique_ptr<ReadBatch> take()
+  {
+    std::unique_lock<std::mutex> lock(mutex_);
+    changed_.wait(lock, [this] { return !free_.empty() || stopping_; });
+    if (stopping_)
+    {
+      return nullptr;
+    }
+    std::unique_ptr<ReadBatch> batch = std::move(free_.back());
+    free_.pop_back();
+    return batch;
+  }
+
+  void hand(std::unique_ptr<ReadBatch> batch)
+  {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      full_.push_back(std::move(batch));
+    }
+    changed_.notify_all();
+  }
+
+  rosbag::View* view_;
+  ReadOne read_one_;
+  std::thread thread_;
+  std::mutex mutex_;
+  std::condition_variable changed_;
+  std::deque<std::unique_ptr<ReadBatch>> full_;  ///< read, oldest first
+  std::vector<std::unique_ptr<ReadBatch>> free_;
+  bool stopping_ = false;
+};
+
+/// IN is truncated or corrupt (`what`: as rosbag says it), after `received` IMU messages.
+std::string corruptInputMessage(const Options& options, const std::string& what, std::uint64_t received)
+{
+  return corruptBagMessage(options.in, what) + " Nothing was written to " + options.out +
+         (received > 0 ? " (" + std::to_string(received) + " IMU messages had been read)" : std::string());
+}
+
 /// Writes the outputs of one bag; the caller owns the temporary file.
 class BagCompensator
 {
@@ -224,11 +400,11 @@ public:
   /// Runs over the input, writing OUT to `temp_path`; a truncated or corrupt input
   /// (rosbag::BagException, a message that does not deserialise) becomes one std::runtime_error
   /// that says so and what to do.
-  void run(const std::string& temp_path)
+  void run(rosbag::Bag* in, const std::string& temp_path)
   {
     try
     {
-      runUnchecked(temp_path);
+      runUnchecked(in, temp_path);
     }
     catch (const rosbag::BagException& e)
     {
@@ -242,15 +418,13 @@ public:
 
   std::string corruptMessage(const std::string& what) const
   {
-    return corruptBagMessage(options_.in, what) + " Nothing was written to " + options_.out +
-           (received_ > 0 ? " (" + std::to_string(received_) + " IMU messages had been read)" : std::string());
+    return corruptInputMessage(options_, what, received_);
   }
 
-  /// IN has passed checkBagStructure (bagFileProblem).
-  void runUnchecked(const std::string& temp_path)
+  /// IN has passed checkBagStructure (bagFileProblem) and is open in *bag (openInput).
+  void runUnchecked(rosbag::Bag* bag, const std::string& temp_path)
   {
-    rosbag::Bag in;
-    in.open(options_.in, rosbag::bagmode::Read);
+    rosbag::Bag& in = *bag;
     const std::string imu_topic = absoluteTopic(options_.imu_topic);
 
     rosbag::View all(in);
@@ -283,61 +457,18 @@ public:
       const Role role = topic == imu_topic                                      ? Role::kImu
                         : options_.outputs.ground_truth && isGroundTruth(topic) ? Role::kCopy
                                                                                 : Role::kSkip;
-      connections.push_back(InputConnection{ c->header.get(), c->id, role, std::nullopt });
+      connections.push_back(InputConnection{ c->header.get(), c->id, role, topic });
     }
     rosbag::View view(in, [&connections](const rosbag::ConnectionInfo* c) {
       return std::any_of(connections.begin(), connections.end(),
                          [c](const InputConnection& i) { return i.id == c->id && i.role != Role::kSkip; });
     });
 
-    // Compression in a thread of the writer: it overlaps reading and the core when a core is free.
-    BagWriter out(temp_path, options_.compression, options_.compression != BagWriter::Compression::kNone);
-    std::size_t last = 0;  // messages of one connection tend to follow each other
+    // Compression and file writes in a thread of the writer: they overlap the core.
+    BagWriter out(temp_path, options_.compression, true);
     const ros::Time begin = all.getBeginTime();
     const double span = std::max((all.getEndTime() - begin).toSec(), 1e-9);
-    auto last_report = std::chrono::steady_clock::now();
-    std::uint64_t messages = 0;
-    for (const rosbag::MessageInstance& m : view)
-    {
-      const ros::M_string* header = m.getConnectionHeader().get();
-      if (connections[last].header != header)
-      {
-        last = std::find_if(connections.begin(), connections.end(),
-                            [header](const InputConnection& c) { return c.header == header; }) -
-               connections.begin();
-        if (last == connections.size())
-        {
-          throw std::runtime_error("a message of topic '" + m.getTopic() + "' has no connection record");
-        }
-      }
-      InputConnection& connection = connections[last];
-      if (connection.role == Role::kImu)
-      {
-        const sensor_msgs::Imu::ConstPtr imu = m.instantiate<sensor_msgs::Imu>();
-        if (!imu)
-        {
-          throw std::runtime_error("topic '" + m.getTopic() + "' holds " + m.getDataType() + ", not sensor_msgs/Imu");
-        }
-        process(*imu, m.getTime(), &out);
-      }
-      else
-      {
-        if (!connection.copy)
-        {
-          connection.copy = out.addConnection(absoluteTopic(m.getTopic()), *header);  // named as the outputs
-        }
-        out.write(*connection.copy, m.getTime(), m);
-      }
-      if (++messages % 256 == 0)
-      {
-        const auto now = std::chrono::steady_clock::now();
-        if (now - last_report > std::chrono::seconds(2))
-        {
-          last_report = now;
-          reportProgress((m.getTime() - begin).toSec(), span);
-        }
-      }
-    }
+    processAll(&view, connections, begin, span, &out);
     out.close();
     in.close();
     // The last line stays: the whole bag was read.
@@ -406,8 +537,98 @@ private:
     const ros::M_string* header;  ///< rosbag::ConnectionInfo::header
     std::uint32_t id;
     Role role;
-    std::optional<std::uint32_t> copy;  ///< OUT's connection, for kCopy
+    std::string topic;  ///< with its leading '/', as the outputs are named
   };
+
+  /// In the reading thread: finds the connection of `m` (*last: the previous message's, which
+  /// the next one tends to share) and adds `m` to *batch, deserialised if it is an IMU message.
+  static void readMessage(const rosbag::MessageInstance& m, const std::vector<InputConnection>& connections,
+                          std::size_t* last, ReadBatch* batch)
+  {
+    const ros::M_string* header = m.getConnectionHeader().get();
+    if (connections[*last].header != header)
+    {
+      *last = std::find_if(connections.begin(), connections.end(),
+                           [header](const InputConnection& c) { return c.header == header; }) -
+              connections.begin();
+      if (*last == connections.size())
+      {
+        throw std::runtime_error("a message of topic '" + m.getTopic() + "' has no connection record");
+      }
+    }
+    ReadBatch::Message message;
+    message.time = m.getTime();
+    message.connection = *last;
+    if (connections[*last].role == Role::kImu)
+    {
+      message.imu = m.instantiate<sensor_msgs::Imu>();
+      if (!message.imu)
+      {
+        throw std::runtime_error("topic '" + m.getTopic() + "' holds " + m.getDataType() + ", not sensor_msgs/Imu");
+      }
+    }
+    else
+    {
+      message.offset = batch->used;
+      message.size = m.size();
+      ros::serialization::OStream stream(batch->addBytes(message.size), message.size);
+      m.write(stream);
+    }
+    batch->messages.push_back(std::move(message));
+  }
+
+  /// Compensates the messages of `view` (those of `connections` not skipped) in bag order into
+  /// *out, copying ground_truth/* through; they are read ahead by a thread (ReadAhead). Says
+  /// how far it is on stderr every 2 s or so (`begin`, `span`: the bag's).
+  void processAll(rosbag::View* view, const std::vector<InputConnection>& connections, const ros::Time& begin,
+                  double span, BagWriter* out)
+  {
+    std::size_t last = 0;  // the reading thread's
+    ReadAhead reader(view, [&connections, &last](const rosbag::MessageInstance& m, ReadBatch* batch) {
+      readMessage(m, connections, &last, batch);
+    });
+    std::vector<std::optional<std::uint32_t>> copies(connections.size());  // OUT's connection, for kCopy
+    auto last_report = std::chrono::steady_clock::now();
+    std::uint64_t messages = 0;
+    while (true)
+    {
+      std::unique_ptr<ReadBatch> batch = reader.next();
+      for (const ReadBatch::Message& m : batch->messages)
+      {
+        if (m.imu)
+        {
+          process(*m.imu, m.time, out);
+        }
+        else
+        {
+          std::optional<std::uint32_t>& copy = copies[m.connection];
+          if (!copy)
+          {
+            copy = out->addConnection(connections[m.connection].topic, *connections[m.connection].header);
+          }
+          out->write(*copy, m.time, batch->bytes.data() + m.offset, m.size);
+        }
+        if (++messages % 256 == 0)
+        {
+          const auto now = std::chrono::steady_clock::now();
+          if (now - last_report > std::chrono::seconds(2))
+          {
+            last_report = now;
+            reportProgress((m.time - begin).toSec(), span);
+          }
+        }
+      }
+      if (batch->error)
+      {
+        std::rethrow_exception(batch->error);
+      }
+      if (batch->last)
+      {
+        return;
+      }
+      reader.recycle(std::move(batch));
+    }
+  }
 
   /// The messages of `topic` in IN (with or without its leading '/') up to bag time `until`.
   static rosbag::View topicView(const rosbag::Bag& in, const std::string& topic, const ros::Time& until = ros::TIME_MAX)
@@ -583,14 +804,43 @@ private:
   std::optional<std::uint32_t> filtered_connection_, wave_connection_, bias_connection_;  ///< in OUT
 };
 
-/// Checks the input exists and that rosbag can read it safely (bag_check.h).
-void checkInput(const Options& options)
+/// IN, checked and open: it exists and rosbag can read it safely (bagFileProblem, which reads the
+/// whole file). rosbag::Bag::open reads only the records around the chunks, which
+/// bagOpenProblem checks first without reading the chunks, so rosbag opens the bag (and, before
+/// that, the bag's constructor loads rosbag's encryption plugins, a walk of the ROS package path)
+/// while the whole-file check runs in a thread. No message is read before that check has passed,
+/// and its message is the one given for a bag it refuses, as when it ran alone.
+std::unique_ptr<rosbag::Bag> openInput(const Options& options)
 {
-  const std::string problem = bagFileProblem(options.in);
-  if (!problem.empty())
+  std::future<std::string> problem = std::async(std::launch::async, bagFileProblem, options.in);
+  auto bag = std::make_unique<rosbag::Bag>();
+  const std::string open_problem = bagOpenProblem(options.in);
+  std::string open_error;
+  if (open_problem.empty())
   {
-    throw std::runtime_error(problem);
+    try
+    {
+      bag->open(options.in, rosbag::bagmode::Read);
+    }
+    catch (const rosbag::BagException& e)
+    {
+      open_error = e.what();
+    }
   }
+  const std::string why = problem.get();
+  if (!why.empty())
+  {
+    throw std::runtime_error(why);
+  }
+  if (!open_problem.empty())
+  {
+    throw std::runtime_error(open_problem);  // not expected: bagFileProblem checks all it does
+  }
+  if (!open_error.empty())
+  {
+    throw std::runtime_error(corruptInputMessage(options, open_error, 0));
+  }
+  return bag;
 }
 }  // namespace
 
@@ -605,7 +855,7 @@ int compensateBagMain(int argc, char** argv)
     if (!parsed)
       return 0;
     options = *parsed;
-    checkInput(options);
+    const std::unique_ptr<rosbag::Bag> in = openInput(options);
     const Parameters params = loadParameters(options);
     // Both outputs are created (as temporaries) before the bag is read: one that cannot be
     // written is said at once.
@@ -616,7 +866,7 @@ int compensateBagMain(int argc, char** argv)
       gains.emplace(options.tune_gains);
     }
     BagCompensator compensator(options, params);
-    compensator.run(out.temporary());
+    compensator.run(in.get(), out.temporary());
     const std::string tuned = gains ? compensator.tuneGains() : std::string();
     out.commit();
     compensator.printSummary();

@@ -22,6 +22,13 @@ std::string checkBagStructure(const std::string& path);
 /// Reads the whole file once (checkBagStructure).
 std::string bagFileProblem(const std::string& path);
 
+/// bagFileProblem without reading the chunks' contents: what rosbag::Bag::open reads (the file
+/// header, connection and chunk info records, chunk headers and index records) is checked as
+/// bagFileProblem checks it, index entries only against their chunk's size. Enough for rosbag to
+/// open the bag, not to read its messages; quick (it skips over the chunks). Whatever it finds,
+/// bagFileProblem finds too.
+std::string bagOpenProblem(const std::string& path);
+
 /// "input bag 'PATH' is truncated or corrupt (WHAT); a bag cut off while recording has no
 /// index: 'rosbag reindex PATH' recovers the messages written before the cut." WHAT: what the
 /// structure check or rosbag said.

@@ -81,6 +81,9 @@ public:
   /// Appends a message read from another bag as its serialised bytes.
   void write(std::uint32_t connection, const ros::Time& time, const rosbag::MessageInstance& message);
 
+  /// Appends a message already serialised (`size` bytes at `data`), copied as they are.
+  void write(std::uint32_t connection, const ros::Time& time, const std::uint8_t* data, std::uint32_t size);
+
   /// Writes the last chunk, the index (connection and chunk info records) and the final file
   /// header, and closes the file.
   void close();
