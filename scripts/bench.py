@@ -23,6 +23,7 @@ Sections: core-speed, nodelet, bag, memory, accuracy, external-accuracy, real-re
 import argparse
 import csv
 import datetime
+import glob
 import io
 import json
 import os
@@ -152,15 +153,17 @@ class Bench:
                              'items': float(cells[6]) if len(cells) > 6 and cells[6] else 0.0})
         return {'repetitions': 5, 'rows': rows}
 
-    def nodelet_run(self, label, transport, *extra):
-        """One nodelet_benchmark run: {'label', 'fields'}; tcp starts compensator_node first."""
+    def nodelet_run(self, label, transport, *extra, env=None, group=None):
+        """One nodelet_benchmark run: {'label', 'fields'} (and 'group' when given); tcp starts
+        compensator_node first. `env`: another environment (one that finds imu_tools' nodelet)."""
         node = None
         with open(os.path.join(self.tmp, 'node.log'), 'a') as node_log:
             if transport == 'tcp':
                 node = subprocess.Popen([self.exe('compensator_node'), '__name:=compensator'], env=self.env,
                                         stdout=node_log, stderr=subprocess.STDOUT)
-            r = self.output([self.exe('nodelet_benchmark'), '--transport', transport, '--scenario',
-                             self.ros_scenario] + [str(x) for x in extra], stderr=subprocess.STDOUT)
+            r = subprocess.run([self.exe('nodelet_benchmark'), '--transport', transport, '--scenario',
+                                self.ros_scenario] + [str(x) for x in extra], env=env or self.env,
+                               stdout=subprocess.PIPE, stderr=subprocess.STDOUT, universal_newlines=True)
             with open(os.path.join(self.tmp, 'nodelet.log'), 'a') as f:  # ROS's log lines, also on stdout
                 f.write(r.stdout)
             lines = [line for line in r.stdout.split('\n') if line.startswith('transport=')]
@@ -170,7 +173,10 @@ class Bench:
         if r.returncode or not lines:
             sys.stderr.write('\n'.join(r.stdout.split('\n')[-20:]) + '\n')
             raise RuntimeError('nodelet_benchmark failed (%s, %s)' % (label, transport))
-        return {'label': label, 'fields': fields(lines[-1])}
+        run = {'label': label, 'fields': fields(lines[-1])}
+        if group:
+            run['group'] = group
+        return run
 
     def nodelet(self):
         self.start_master()
@@ -191,7 +197,34 @@ class Bench:
                 runs.append(run)
                 if run['fields']['dropped'] == '0':
                     break
+        runs += self.nodelet_side_by_side()
         return {'seed': self.ros_seed, 'paced_s': self.paced_s, 'max_data_s': self.max_data_s, 'runs': runs}
+
+    def madgwick_env(self):
+        """This run's environment extended by imu_tools' DEVEL/setup.bash, or None when no built copy
+        of imu_filter_madgwick's nodelet was given (--imu-tools)."""
+        devel = self.args.imu_tools
+        if not devel or not glob.glob(os.path.join(devel, 'lib', 'libimu_filter_nodelet.so')):
+            log('nodelet side by side: no built imu_tools given (--imu-tools DEVEL), Madgwick not measured')
+            return None
+        r = subprocess.run(['bash', '-c', 'set +u && source "%s/setup.bash" --extend && env -0' % devel],
+                           env=self.env, stdout=subprocess.PIPE, check=True)
+        return dict(kv.split('=', 1) for kv in r.stdout.decode().split('\0') if '=' in kv)
+
+    def nodelet_side_by_side(self):
+        """The compensator and imu_tools' Madgwick nodelet in the same harness, in-process, paced at
+        100 Hz, 1 kHz and 2.8 kHz: latency and the process's CPU time per message."""
+        madgwick = self.madgwick_env()
+        log('nodelet side by side: 100 Hz, 1 kHz, 2.8 kHz' + (' (and Madgwick)' if madgwick else ''))
+        runs = []
+        for label, rate, seconds in (('100 Hz', 100, self.paced_s[0]), ('1 kHz', 1000, self.paced_s[1]),
+                                     ('2.8 kHz', 2800, self.paced_s[2])):
+            runs.append(self.nodelet_run(label, 'intra', '--rate', rate, '--duration', seconds,
+                                         group='side-by-side'))
+            if madgwick:
+                runs.append(self.nodelet_run(label, 'intra', '--rate', rate, '--duration', seconds,
+                                             '--nodelet', 'madgwick', env=madgwick, group='side-by-side'))
+        return runs
 
     def long_bag(self):
         """The long bag every program of the bag section reads (simulated once per run)."""

@@ -252,11 +252,13 @@ bool CompensatorRos::updateMounting(const sensor_msgs::Imu& msg)
   {
     case MountingSource::kNotNeeded:
       mounting_state_ = MountingState::kIdentity;
+      releaseTransformListener();
       return true;
     case MountingSource::kTransform:
       mounting_state_ = MountingState::kFound;
       ROS_INFO("IMU mounting %s -> %s: %s", imu_frame.c_str(), params_.ros.base_frame.c_str(),
                describeMounting(mounting_).c_str());
+      releaseTransformListener();
       return true;
     case MountingSource::kMissing:
       break;
@@ -272,10 +274,18 @@ bool CompensatorRos::updateMounting(const sensor_msgs::Imu& msg)
     return false;
   }
   mounting_state_ = MountingState::kFallback;
+  releaseTransformListener();
   mounting_warned_ = ros::WallTime::now();
   ROS_WARN("no transform %s -> %s after %.1f s (%s): using the identity as IMU mounting", imu_frame.c_str(),
            params_.ros.base_frame.c_str(), params_.ros.mount_timeout, lookup.why.c_str());
   return true;
+}
+
+void CompensatorRos::releaseTransformListener()
+{
+  // The mounting is looked up once. Listening on after that would only cost a thread wake-up per
+  // message of /tf, this node's own transform among them (one per IMU sample).
+  tf_listener_.reset();
 }
 
 void CompensatorRos::publishOutputs(const sensor_msgs::Imu& msg, const CompensatorOutput& out, SampleStatus status)

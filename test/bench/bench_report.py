@@ -17,7 +17,7 @@ def fields(line):
 
 
 def _nodelet_rows(runs):
-    rows = [(r['label'], r['fields']) for r in runs]
+    rows = [(r['label'], r['fields']) for r in runs if 'group' not in r]
     by = {(f['transport'], label): f for label, f in rows}
     sustained_rows = {}  # by transport: the fastest paced run below the closed loop without a drop
     for (t, label), f in by.items():
@@ -56,6 +56,23 @@ def nodelet_markdown(runs):
             print('Latency p50 at %s, separate process / intra-process: %.0f / %.0f us = **%.1f**.'
                   % (label, float(b['p50_us']), float(a['p50_us']), float(b['p50_us']) / float(a['p50_us'])))
     print()
+    side = [(r['label'], r['fields']) for r in runs if r.get('group') == 'side-by-side']
+    if side:
+        print('Side by side in the same harness, in-process, paced: the compensator and imu_tools\' '
+              'Madgwick filter nodelet (imu_filter_madgwick/ImuFilterNodelet, accelerometer and gyro, '
+              'its imu/data the answer). CPU time per message: the whole process (publisher, callback '
+              'queues and the nodelet) over the messages sent.')
+        print()
+        print('| nodelet | input | sent | dropped | latency p50 [us] | p99 [us] | max [us] | CPU per message [us] |')
+        print('|---|---|---|---|---|---|---|---|')
+        for label, f in side:
+            print('| %s | %s | %s | %s | %.0f | %.0f | %.0f | %.1f |' % (
+                f.get('nodelet', 'compensator'), label, f['sent'], f['dropped'], float(f['p50_us']),
+                float(f['p99_us']), float(f['max_us']), float(f.get('cpu_us_per_msg', 'nan'))))
+        if not any(f.get('nodelet') == 'madgwick' for _, f in side):
+            print()
+            print('Madgwick not measured in this run (no built imu_tools given: `--imu-tools DEVEL`).')
+        print()
     return '\n'.join(out)
 
 

@@ -4,6 +4,7 @@
 //
 //   nodelet_benchmark --transport intra|tcp --scenario FILE.yaml --rate HZ --duration S
 //                     [--closed-loop] [--stream] [--rss-csv FILE] [--rss-every N]
+//                     [--nodelet compensator|madgwick]
 //
 // This program is the nodelet manager: a nodelet::Loader holding BenchSource (below) and, for
 // `intra`, the compensator nodelet loaded through pluginlib as `nodelet load` would. BenchSource
@@ -14,6 +15,9 @@
 // them, at most kInFlight unanswered (its queue holds 1000), for S seconds of data. Samples are
 // simulated once (up to kCachedSamples, then replayed with new stamps) unless --stream
 // simulates each one (long runs; with --rss-csv the process RSS is written every N outputs).
+// --nodelet madgwick measures imu_tools' Madgwick filter nodelet (imu_filter_madgwick/
+// ImuFilterNodelet, built outside this repository, found through ROS_PACKAGE_PATH) in the same
+// harness, intra-process only: BenchSource then publishes imu/data_raw and times its imu/data.
 // Output: one line of key=value pairs on stdout.
 #include <algorithm>
 #include <array>
@@ -22,6 +26,7 @@
 #include <cmath>
 #include <condition_variable>
 #include <cstdint>
+#include <ctime>
 #include <fstream>
 #include <iostream>
 #include <memory>
@@ -65,7 +70,23 @@ struct Options
   bool stream = false;
   std::string rss_csv;
   std::int64_t rss_every = 6000;
+  std::string nodelet = "compensator";  ///< the nodelet measured: compensator or madgwick
 };
+
+/// The nodelet measured: its plugin type and the topics it reads and answers on.
+struct Measured
+{
+  const char* type;
+  const char* input;
+  const char* output;
+};
+const Measured kCompensator{ "periodic_bias_compensation/CompensatorNodelet", "imu/data", "odometry/filtered" };
+const Measured kMadgwick{ "imu_filter_madgwick/ImuFilterNodelet", "imu/data_raw", "imu/data" };
+
+const Measured& measured(const Options& o)
+{
+  return o.nodelet == "madgwick" ? kMadgwick : kCompensator;
+}
 
 /// Latency histogram with constant memory: bins of 1/100 decade from 1 ns to 100 s.
 class Histogram
@@ -98,6 +119,14 @@ private:
   std::array<std::uint64_t, kBins> bins_{};
   std::uint64_t count_ = 0;
 };
+
+/// CPU time of the whole process, every thread (publisher, callback queues, the nodelet) [s].
+double processCpuSeconds()
+{
+  timespec t{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
+}
 
 long rssKilobytes()
 {
@@ -172,7 +201,8 @@ private:
   std::vector<sensor_msgs::Imu> cache_;
 };
 
-/// Publisher of imu/data and receiver of odometry/filtered, as a nodelet of the same manager.
+/// Publisher of the measured nodelet's input and receiver of its output (imu/data and
+/// odometry/filtered for the compensator), as a nodelet of the same manager.
 class BenchSource : public nodelet::Nodelet
 {
 public:
@@ -211,6 +241,10 @@ public:
       }
       std::this_thread::sleep_for(std::chrono::milliseconds(20));
     }
+    // Everything sent was answered (or given up): the process's CPU time per input since the
+    // first, publisher included (it replays cached messages: a small share).
+    const double cpu_per_message =
+        (processCpuSeconds() - cpu_start_) / static_cast<double>(std::max<std::int64_t>(sent_, 1));
     sub_.shutdown();  // before the manager's callback queues go
     pub_.shutdown();
     std::lock_guard<std::mutex> lock(mutex_);
@@ -220,7 +254,8 @@ public:
               << " dropped=" << sent_ - received_ << " send_wall_s=" << wall
               << " input_rate=" << static_cast<double>(sent_) / wall << " p50_us=" << latency_.quantile(0.5) * 1e6
               << " p99_us=" << latency_.quantile(0.99) * 1e6 << " max_us=" << max_latency_ * 1e6
-              << " rss_kb=" << rssKilobytes() << std::endl;
+              << " cpu_us_per_msg=" << cpu_per_message * 1e6 << " rss_kb=" << rssKilobytes()
+              << " nodelet=" << options_.nodelet << std::endl;
     if (!options_.rss_csv.empty())
     {
       std::ofstream csv(options_.rss_csv);
@@ -245,9 +280,14 @@ private:
   {
     source_ = std::make_unique<SampleSource>(options_);
     ros::NodeHandle nh = getNodeHandle();
-    pub_ = nh.advertise<sensor_msgs::Imu>("imu/data", 1000);
-    sub_ = nh.subscribe("odometry/filtered", 10000, &BenchSource::outputCallback, this,
-                        ros::TransportHints().tcpNoDelay());
+    const Measured& m = measured(options_);
+    pub_ = nh.advertise<sensor_msgs::Imu>(m.input, 1000);
+    if (options_.nodelet == "madgwick")
+      sub_ = nh.subscribe<sensor_msgs::Imu>(m.output, 10000, &BenchSource::outputCallback<sensor_msgs::Imu>, this,
+                                            ros::TransportHints().tcpNoDelay());
+    else
+      sub_ = nh.subscribe<nav_msgs::Odometry>(m.output, 10000, &BenchSource::outputCallback<nav_msgs::Odometry>, this,
+                                              ros::TransportHints().tcpNoDelay());
     thread_ = std::thread([this] { run(); });
   }
 
@@ -265,6 +305,7 @@ private:
     std::this_thread::sleep_for(std::chrono::milliseconds(500));  // connections settle
     const auto count = static_cast<std::int64_t>(std::llround(options_.duration * options_.rate));
     start_ = Clock::now();
+    cpu_start_ = processCpuSeconds();
     std::int64_t lost = 0;  // closed loop: inputs given up after a second without an answer
     for (std::int64_t k = 0; k < count && !stop_; ++k)
     {
@@ -298,7 +339,9 @@ private:
     end_ = Clock::now();
   }
 
-  void outputCallback(const nav_msgs::Odometry::ConstPtr& msg)
+  /// An output (its stamp is its input's).
+  template <typename Message>
+  void outputCallback(const boost::shared_ptr<const Message>& msg)
   {
     const auto now = Clock::now();
     const auto k =
@@ -338,6 +381,7 @@ private:
   std::int64_t sent_ = 0;
   std::int64_t received_ = 0;
   Clock::time_point start_, end_;
+  double cpu_start_ = 0.0;  ///< processCpuSeconds() when the first input was sent
   Histogram latency_;
   double max_latency_ = 0.0;
   std::vector<RssRow> rss_;
@@ -345,7 +389,8 @@ private:
 
 const char* kUsage =
     "usage: nodelet_benchmark --transport intra|tcp --scenario FILE.yaml --rate HZ --duration S\n"
-    "                         [--closed-loop] [--stream] [--rss-csv FILE] [--rss-every N]\n";
+    "                         [--closed-loop] [--stream] [--rss-csv FILE] [--rss-every N]\n"
+    "                         [--nodelet compensator|madgwick]\n";
 
 /// The options, or nothing after --help.
 std::optional<Options> parseOptions(int argc, char** argv)
@@ -359,11 +404,14 @@ std::optional<Options> parseOptions(int argc, char** argv)
       .flag("--closed-loop", &o.closed_loop)
       .flag("--stream", &o.stream)
       .text("--rss-csv", &o.rss_csv)
-      .integer("--rss-every", &o.rss_every);
+      .integer("--rss-every", &o.rss_every)
+      .text("--nodelet", &o.nodelet);
   if (!cli.parse(argc, argv))
     return std::nullopt;
   if ((o.transport != "intra" && o.transport != "tcp") || o.scenario.empty() || !(o.rate > 0.0) || !(o.duration > 0.0))
     throw pbc::UsageError("--transport intra|tcp, --scenario, --rate > 0 and --duration > 0 are required");
+  if (o.nodelet != "compensator" && (o.nodelet != "madgwick" || o.transport != "intra"))
+    throw pbc::UsageError("--nodelet is compensator or madgwick (madgwick with --transport intra only)");
   return o;
 }
 }  // namespace
@@ -397,10 +445,17 @@ int main(int argc, char** argv)
     });
     const nodelet::M_string no_remappings;
     const nodelet::V_string no_argv;
-    if (options.transport == "intra" &&
-        !manager.load("/compensator", "periodic_bias_compensation/CompensatorNodelet", no_remappings, no_argv))
+    if (options.nodelet == "madgwick")
     {
-      throw std::runtime_error("the compensator nodelet did not load");
+      // Accelerometer and gyro only, no TF: its imu/data (orientation added) is the answer.
+      ros::param::set("/madgwick/use_mag", false);
+      ros::param::set("/madgwick/publish_tf", false);
+      ros::param::set("/madgwick/world_frame", std::string("enu"));
+    }
+    const Measured& m = measured(options);
+    if (options.transport == "intra" && !manager.load("/" + options.nodelet, m.type, no_remappings, no_argv))
+    {
+      throw std::runtime_error(std::string("the nodelet ") + m.type + " did not load");
     }
     if (!manager.load("/bench_source", "bench/BenchSource", no_remappings, no_argv))
     {

@@ -79,6 +79,21 @@ class RenderTest(unittest.TestCase):
             for row in block.get('table', {}).get('rows', []):
                 self.assertIn('| ' + ' | '.join(row) + ' |', self.md)
 
+    def test_nodelet_side_by_side(self):
+        results = copy.deepcopy(FIXTURE)
+        runs = results['sections']['nodelet']['runs']
+        base = dict(runs[0]['fields'], p50_us='111', p99_us='222', max_us='333', cpu_us_per_msg='4.56')
+        runs += [{'label': '2.8 kHz', 'group': 'side-by-side', 'fields': dict(base, nodelet='compensator')},
+                 {'label': '2.8 kHz', 'group': 'side-by-side', 'fields': dict(base, nodelet='madgwick', dropped='7')}]
+        md = render(results)
+        self.assertIn('| compensator | 2.8 kHz | %s | %s | 111 | 222 | 333 | 4.6 |' % (base['sent'], base['dropped']), md)
+        self.assertIn('| madgwick | 2.8 kHz | %s | 7 | 111 | 222 | 333 | 4.6 |' % base['sent'], md)
+        self.assertNotIn('Madgwick not measured', md)
+        # The side-by-side runs stay out of the transport table.
+        self.assertNotIn('| intra | 2.8 kHz |', md)
+        self.assertIn('Madgwick not measured', render(dict(results, sections=dict(
+            results['sections'], nodelet=dict(results['sections']['nodelet'], runs=runs[:-1])))))
+
     def test_ros_side_figures(self):
         nodelet = self.sections['nodelet']
         for run in nodelet['runs']:

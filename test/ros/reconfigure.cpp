@@ -11,10 +11,12 @@
 //   - the IMU mounting comes from tf2: imu_link is published turned +90 deg about z on base_link,
 //     so a level IMU gives a base orientation of -90 deg about z in odometry/filtered
 // Private parameter: calibration_file, the path the compensator was given.
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <fstream>
 #include <mutex>
+#include <optional>
 #include <thread>
 #include <vector>
 
@@ -115,23 +117,33 @@ private:
   // Declared last: destroyed first, so no callback in flight outlives the state it writes.
   ros::Subscriber sub_;
 };
-/// Publishers of /rosout known to the master (every node has one), -1 if it cannot be asked.
-int rosoutPublishers()
+/// The nodes the master lists as publishers (kind 0) or subscribers (kind 1) of `topic`; nothing
+/// if it cannot be asked.
+std::optional<std::vector<std::string>> nodesOn(const std::string& topic, int kind)
 {
   XmlRpc::XmlRpcValue args, result, payload;
   args[0] = ros::this_node::getName();
   if (!ros::master::execute("getSystemState", args, result, payload, true))
   {
-    return -1;
+    return std::nullopt;
   }
-  for (int i = 0; i < payload[0].size(); ++i)
+  std::vector<std::string> nodes;
+  for (int i = 0; i < payload[kind].size(); ++i)
   {
-    if (static_cast<std::string>(payload[0][i][0]) == "/rosout")
+    if (static_cast<std::string>(payload[kind][i][0]) == topic)
     {
-      return payload[0][i][1].size();
+      for (int j = 0; j < payload[kind][i][1].size(); ++j)
+        nodes.push_back(static_cast<std::string>(payload[kind][i][1][j]));
     }
   }
-  return 0;
+  return nodes;
+}
+
+/// Publishers of /rosout known to the master (every node has one), -1 if it cannot be asked.
+int rosoutPublishers()
+{
+  const auto nodes = nodesOn("/rosout", 0);
+  return nodes ? static_cast<int>(nodes->size()) : -1;
 }
 
 /// Collects what the nodes log on /rosout (rostest starts no rosout node to aggregate it).
@@ -341,6 +353,19 @@ TEST_F(Reconfigure, MountingFromTf)
   EXPECT_NEAR(std::abs(q.w), std::cos(M_PI / 4.0), 1e-3);
   EXPECT_NEAR(q.z * (q.w < 0 ? -1.0 : 1.0), -std::sin(M_PI / 4.0), 1e-3) << "mounting rotation not applied";
   EXPECT_EQ(last.child_frame_id, "base_link");
+
+  // The mounting is decided: the nodelet's manager no longer listens to /tf (where the nodelet
+  // publishes one transform per sample).
+  std::optional<std::vector<std::string>> tf_subscribers;
+  for (const ros::WallTime asked = ros::WallTime::now(); (ros::WallTime::now() - asked).toSec() < 5.0;
+       ros::WallDuration(0.1).sleep())
+  {
+    tf_subscribers = nodesOn("/tf", 1);
+    if (tf_subscribers && std::count(tf_subscribers->begin(), tf_subscribers->end(), "/manager") == 0)
+      break;
+  }
+  ASSERT_TRUE(tf_subscribers.has_value()) << "the master could not be asked";
+  EXPECT_EQ(std::count(tf_subscribers->begin(), tf_subscribers->end(), "/manager"), 0);
 }
 
 int main(int argc, char** argv)

@@ -68,6 +68,8 @@ private:
   void imuCallback(const sensor_msgs::Imu::ConstPtr& msg);
   /// Resolves the mounting; false while the sample must be dropped (still waiting).
   bool updateMounting(const sensor_msgs::Imu& msg);
+  /// Stops listening to /tf once the mounting is decided (it is never looked up again).
+  void releaseTransformListener();
   void publishOutputs(const sensor_msgs::Imu& msg, const CompensatorOutput& out, SampleStatus status);
   void appendPaths(const ros::Time& stamp, const CompensatorOutput& out);
   void clearPaths();
@@ -107,7 +109,7 @@ private:
   ros::WallTime mounting_warned_;  ///< when the identity mounting was last said (WARN)
   double first_stamp_ = -1.0;      ///< stamp of the first message [s], for mount_timeout
   tf2_ros::Buffer tf_buffer_;
-  std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
+  std::unique_ptr<tf2_ros::TransformListener> tf_listener_;  ///< until the mounting is decided
   std::unique_ptr<tf2_ros::TransformBroadcaster> tf_broadcaster_;
 
   ros::Subscriber imu_sub_;
