@@ -3,12 +3,15 @@
 #include <fftw3.h>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cmath>
 #include <complex>
+#include <limits>
 #include <mutex>
 #include <stdexcept>
 #include <thread>
+#include <tuple>
 
 #include "periodic_bias_compensation/common/numeric.h"
 #include "periodic_bias_compensation/gap/gap.h"
@@ -375,21 +378,190 @@ double repeatedFraction(const Eigen::MatrixXd& data)
   return static_cast<double>(repeated) / (data.rows() - 1);
 }
 
+namespace
+{
+/// Mean of exp(2 pi i f (t - t0)) over stamp[from, to): its angle is the stamps' phase against
+/// the trial rate f, its length their coherence (1 without jitter, whatever was lost).
+std::complex<double> stampPhasor(const std::vector<double>& stamp, double f, std::size_t from, std::size_t to)
+{
+  std::complex<double> sum = 0.0;
+  for (std::size_t i = from; i < to; ++i)
+  {
+    double x = f * (stamp[i] - stamp[0]);
+    x -= std::floor(x);
+    sum += std::polar(1.0, 2.0 * M_PI * x);
+  }
+  return to > from ? sum / static_cast<double>(to - from) : sum;
+}
+
+/// The rate f corrected by the drift of the stamps' phase from block to block: against a rate
+/// off by d, the phase turns by -2 pi d per second. Lost samples leave the phase as it is.
+double refineRate(const std::vector<double>& stamp, double f, std::size_t block)
+{
+  double sw = 0, st = 0, sp = 0, stt = 0, stp = 0;
+  double previous = 0.0;
+  bool first = true;
+  for (std::size_t from = 0; from + block <= stamp.size(); from += block)
+  {
+    const std::complex<double> z = stampPhasor(stamp, f, from, from + block);
+    if (std::abs(z) < 0.3)
+    {
+      continue;  // too blurred to carry a phase
+    }
+    const double phase = first ? std::arg(z) : previous + wrapAngle(std::arg(z) - previous);
+    first = false;
+    previous = phase;
+    const double tau = 0.5 * (stamp[from] + stamp[from + block - 1]) - stamp[0];
+    sw += 1.0;
+    st += tau;
+    sp += phase;
+    stt += tau * tau;
+    stp += tau * phase;
+  }
+  const double det = sw * stt - st * st;
+  if (sw < 2.0 || !(det > 0.0))
+  {
+    return f;
+  }
+  const double slope = (sw * stp - st * sp) / det;
+  return f - slope / (2.0 * M_PI);
+}
+
+/// The sample indices: each stamp's nearest index on the line u = f (t - t0) - c, or one either
+/// side, chosen so that the indices increase and the residuals (of spread `sigma`, in periods)
+/// and the lost samples (each as unlikely as a residual of 3.7 sigma) cost least (Viterbi).
+std::vector<double> assignIndices(const std::vector<double>& stamp, double f, double c, double sigma)
+{
+  const std::size_t n = stamp.size();
+  constexpr int kCandidates = 4;  // nearest - 1, nearest, nearest + 1, best predecessor + 1
+  const double loss = 2.0 * std::log(1000.0);
+  std::vector<std::array<double, kCandidates>> k(n);
+  std::vector<std::array<signed char, kCandidates>> from(n);
+  std::array<double, kCandidates> cost{};
+  int best = 0;
+  for (std::size_t i = 0; i < n; ++i)
+  {
+    const double u = f * (stamp[i] - stamp[0]) - c;
+    const double nearest = std::round(u);
+    k[i] = { nearest - 1.0, nearest, nearest + 1.0, i == 0 ? nearest : k[i - 1][best] + 1.0 };
+    std::array<double, kCandidates> next{};
+    for (int q = 0; q < kCandidates; ++q)
+    {
+      const double r = (u - k[i][q]) / sigma;
+      double step = i == 0 ? 0.0 : std::numeric_limits<double>::infinity();
+      from[i][q] = 0;
+      for (int p = 0; i > 0 && p < kCandidates; ++p)
+      {
+        const double gap = k[i][q] - k[i - 1][p] - 1.0;
+        const double c_step = gap < 0.0 ? std::numeric_limits<double>::infinity() : cost[p] + gap * loss;
+        if (c_step < step)
+        {
+          step = c_step;
+          from[i][q] = static_cast<signed char>(p);
+        }
+      }
+      next[q] = step + r * r;
+    }
+    cost = next;
+    best = static_cast<int>(std::min_element(cost.begin(), cost.end()) - cost.begin());
+  }
+  std::vector<double> index(n);
+  for (std::size_t i = n; i-- > 0;)
+  {
+    index[i] = k[i][best];
+    best = from[i][best];
+  }
+  const double k0 = index.empty() ? 0.0 : index[0];
+  for (double& v : index)
+  {
+    v -= k0;
+  }
+  return index;
+}
+
+/// Least-squares line stamp = a + b k, refitted once without the residuals beyond 5 robust
+/// standard deviations (a stamp delayed by a stalled driver does not tilt it).
+std::pair<double, double> trimmedLine(const std::vector<double>& stamp, const std::vector<double>& k)
+{
+  const std::size_t n = stamp.size();
+  std::vector<char> use(n, 1);
+  double a = 0.0, b = 0.0;
+  for (int pass = 0; pass < 2; ++pass)
+  {
+    double sw = 0, sk = 0, st = 0, skk = 0, skt = 0;
+    for (std::size_t i = 0; i < n; ++i)
+    {
+      if (use[i])
+      {
+        const double t = stamp[i] - stamp[0];
+        sw += 1.0;
+        sk += k[i];
+        st += t;
+        skk += k[i] * k[i];
+        skt += k[i] * t;
+      }
+    }
+    b = (sw * skt - sk * st) / std::max(sw * skk - sk * sk, 1e-300);
+    a = (st - b * sk) / sw;
+    std::vector<double> r(n);
+    for (std::size_t i = 0; i < n; ++i)
+    {
+      r[i] = std::abs(stamp[i] - stamp[0] - a - b * k[i]);
+    }
+    std::vector<double> sorted = r;
+    const double limit = 5.0 * 1.4826 * upperMedian(sorted.begin(), sorted.end()) + 1e-12;
+    for (std::size_t i = 0; i < n; ++i)
+    {
+      use[i] = r[i] <= limit ? 1 : 0;
+    }
+  }
+  return { stamp[0] + a, b };
+}
+
+/// The median interval's rate [Hz] (0 without a positive one).
+double medianIntervalRate(const std::vector<double>& stamp)
+{
+  std::vector<double> dt;
+  dt.reserve(stamp.size());
+  for (std::size_t i = 1; i < stamp.size(); ++i)
+  {
+    dt.push_back(stamp[i] - stamp[i - 1]);
+  }
+  const double med = dt.empty() ? 0.0 : median(std::move(dt));
+  return med > 0.0 ? 1.0 / med : 0.0;
+}
+}  // namespace
+
+StampLine fitStampLine(const std::vector<double>& stamp, double rate)
+{
+  StampLine line;
+  const std::size_t n = stamp.size();
+  if (n < 3 || !(rate > 0.0))
+  {
+    line.index.resize(n);
+    for (std::size_t i = 0; i < n; ++i)
+    {
+      line.index[i] = static_cast<double>(i);
+    }
+    line.offset = n > 0 ? stamp[0] : 0.0;
+    line.period = rate > 0.0 ? 1.0 / rate : 0.0;
+    return line;
+  }
+  double f = refineRate(stamp, rate, 256);
+  f = refineRate(stamp, f, std::max<std::size_t>(256, n / 32));
+  const std::complex<double> z = stampPhasor(stamp, f, 0, n);
+  const double coherence = std::clamp(std::abs(z), 1e-3, 1.0 - 1e-9);
+  const double sigma = std::clamp(std::sqrt(-2.0 * std::log(coherence)) / (2.0 * M_PI), 0.02, 0.3);
+  line.index = assignIndices(stamp, f, std::arg(z) / (2.0 * M_PI), sigma);
+  std::tie(line.offset, line.period) = trimmedLine(stamp, line.index);
+  return line;
+}
+
 double estimateRate(const Recording& recording)
 {
-  const std::size_t n = recording.size();
-  if (n < 2)
-  {
-    return 0.0;
-  }
-  std::vector<double> dt;
-  dt.reserve(n - 1);
-  for (std::size_t i = 1; i < n; ++i)
-  {
-    dt.push_back(recording.stamp[i] - recording.stamp[i - 1]);
-  }
-  const double med = median(std::move(dt));
-  return med > 0.0 ? 1.0 / med : 0.0;
+  const double guess = medianIntervalRate(recording.stamp);
+  const StampLine line = fitStampLine(recording.stamp, guess);
+  return line.period > 0.0 ? 1.0 / line.period : guess;
 }
 
 StampStats stampStats(const std::vector<double>& stamp, double rate)
@@ -400,46 +572,24 @@ StampStats stampStats(const std::vector<double>& stamp, double rate)
   {
     return s;
   }
-  std::vector<double> k(n);
-  double prev_k = -1.0;
-  for (std::size_t i = 0; i < n; ++i)
+  for (std::size_t i = 1; i < n; ++i)
   {
-    k[i] = std::round((stamp[i] - stamp[0]) * rate);
-    if (k[i] <= prev_k)
-    {
-      k[i] = prev_k + 1.0;  // jitter or backwards: keep the index increasing
-    }
-    prev_k = k[i];
-    if (i > 0 && stamp[i] < stamp[i - 1])
-    {
-      s.backwards += 1.0;
-    }
+    s.backwards += stamp[i] < stamp[i - 1] ? 1.0 : 0.0;
   }
-  // Straight line stamp = a + b k.
-  double sk = 0, st = 0, skk = 0, skt = 0;
-  for (std::size_t i = 0; i < n; ++i)
-  {
-    sk += k[i];
-    st += stamp[i];
-    skk += k[i] * k[i];
-    skt += k[i] * stamp[i];
-  }
-  const double dn = static_cast<double>(n);
-  const double b = (dn * skt - sk * st) / std::max(dn * skk - sk * sk, 1e-300);
-  const double a = (st - b * sk) / dn;
-  s.rate = b > 0.0 ? 1.0 / b : 0.0;
+  const StampLine line = fitStampLine(stamp, rate);
+  const std::vector<double>& k = line.index;
+  s.rate = line.period > 0.0 ? 1.0 / line.period : 0.0;
   std::vector<double> r(n);
   for (std::size_t i = 0; i < n; ++i)
   {
-    r[i] = stamp[i] - (a + b * k[i]);
+    r[i] = stamp[i] - (line.offset + line.period * k[i]);
   }
-  std::vector<double> ar = r;
-  const double med = upperMedian(ar.begin(), ar.end());
-  for (double& v : ar)
+  const double med = upperMedian(r.begin(), r.end());
+  for (double& v : r)
   {
     v = std::abs(v - med);
   }
-  s.jitter = 1.4826 * upperMedian(ar.begin(), ar.end());
+  s.jitter = 1.4826 * upperMedian(r.begin(), r.end());
   double missing = 0.0;
   for (std::size_t i = 1; i < n; ++i)
   {

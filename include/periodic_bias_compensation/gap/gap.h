@@ -61,7 +61,8 @@ struct Recording
   }
 };
 
-/// Median sample rate from the stamps [Hz] (0 with fewer than 2 samples).
+/// The sample rate of the stamps [Hz]: the slope of fitStampLine started from the median
+/// interval (0 with fewer than 2 samples).
 double estimateRate(const Recording& recording);
 
 /// Samples with stamp - stamp[0] in [from, to) * span (fractions of the recording's span).
@@ -115,8 +116,23 @@ double flatTopFraction(const Eigen::Ref<const Eigen::VectorXd>& x, double* limit
 /// sensor updates repeats its last reading).
 double repeatedFraction(const Eigen::MatrixXd& data);
 
-/// Stamp statistics: residual of a straight-line fit of stamp against the sample index implied
-/// by the nominal rate, and the lost samples that index implies.
+/// The straight line the stamps follow, stamp = offset + period * index, with each sample's index
+/// (0 for the first, increasing, a gap where samples were lost). The rate is refined from `rate`
+/// by the drift of the stamps' phase from block to block (lost samples leave the phase as it
+/// is, jitter only blurs it), the indices are the most likely increasing ones on that line
+/// (Viterbi over the nearest index and one either side), and the line is then a least-squares
+/// fit of the stamps on the indices without the outliers. A rate off by 0.01 % gives no lost
+/// samples over an hour, as a fit on indices rounded from the nominal rate would.
+struct StampLine
+{
+  double offset = 0.0;        ///< stamp of index 0 [s]
+  double period = 0.0;        ///< [s]
+  std::vector<double> index;  ///< per stamp [-]
+};
+StampLine fitStampLine(const std::vector<double>& stamp, double rate);
+
+/// Stamp statistics: residual of the stamps about their line (fitStampLine), and the lost
+/// samples its indices imply.
 struct StampStats
 {
   double rate = 0.0;           ///< fitted rate [Hz]
