@@ -544,6 +544,8 @@ void tryBestPair(const DiagnoseContext& context, const Report& rep, std::vector<
   pair.specs.insert(pair.specs.end(), cands[j].specs.begin(), cands[j].specs.end());
   pair.params = { { cands[0].effect, cands[0].params }, { cands[j].effect, cands[j].params } };
   pair.note = "best two together";
+  pair.at_limit = cands[0].at_limit;
+  pair.at_limit.insert(pair.at_limit.end(), cands[j].at_limit.begin(), cands[j].at_limit.end());
   std::vector<Candidate> one{ pair };
   judge(context, rep, &one);
   if (one[0].shrink > cands[0].shrink + context.opt.pair_gain)
@@ -570,6 +572,9 @@ void candidateStage(const DiagnoseContext& context, std::vector<Recording> base_
   tryBestPair(context, *rep, &cands);
   rep->ranking = cands;
 }
+
+/// The highest confidence of a verdict whose fit a search limit stopped (not confident).
+constexpr double kAtLimitConfidence = 0.45;
 
 /// Verdict: no_gap, none or the best candidate with its confidence.
 void verdictStage(const DiagnoseOptions& opt, Report* rep)
@@ -612,6 +617,13 @@ void verdictStage(const DiagnoseOptions& opt, Report* rep)
     const double margin = b.shrink - std::max(0.0, second);
     rep->confidence = std::max(0.0, std::min(1.0, b.shrink)) * std::max(0.0, std::min(1.0, 0.4 + margin / 0.4));
     rep->verdict_text = b.effect + " explains " + num(100.0 * b.shrink) + " % of the gap on the withheld part";
+    if (!b.at_limit.empty())
+    {
+      rep->confidence = std::min(rep->confidence, kAtLimitConfidence);
+      rep->verdict_text += "; fitted at a search limit (" + b.at_limit.front() +
+                           (b.at_limit.size() > 1 ? ", and " + std::to_string(b.at_limit.size() - 1) + " more" : "") +
+                           "): the effect may be larger or another";
+    }
   }
 }
 
@@ -802,7 +814,8 @@ nlohmann::ordered_json rankingJson(const std::vector<Candidate>& ranking)
                   { "gap_before", sixDigits(c.gap_before) },
                   { "gap_after", sixDigits(c.gap_after) },
                   { "shrink", sixDigits(c.shrink) },
-                  { "fit", c.note } });
+                  { "fit", c.note },
+                  { "at_limit", c.at_limit } });
   }
   return j;
 }
@@ -901,8 +914,9 @@ std::string reportSummary(const Report& r)
   for (std::size_t i = 0; i < std::min<std::size_t>(8, r.ranking.size()); ++i)
   {
     const Candidate& c = r.ranking[i];
-    std::snprintf(buf, sizeof(buf), "  %-34s gap %.3g -> %.3g  shrink %+6.1f %%  %.150s\n", c.effect.c_str(),
-                  c.gap_before, c.gap_after, 100 * c.shrink, c.params.dump().c_str());
+    std::snprintf(buf, sizeof(buf), "  %-34s gap %.3g -> %.3g  shrink %+6.1f %%  %.150s%s\n", c.effect.c_str(),
+                  c.gap_before, c.gap_after, 100 * c.shrink, c.params.dump().c_str(),
+                  c.at_limit.empty() ? "" : "  [at a search limit]");
     o << buf;
   }
   std::snprintf(buf, sizeof(buf), "VERDICT: %s (confidence %.2f, shrink on withheld %.0f %%)\n  params %s\n  %s\n",

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <limits>
 #include <optional>
+#include <sstream>
 
 #include <Eigen/Dense>
 
@@ -113,15 +114,6 @@ Vec sumSquares(const std::vector<sim::EffectSpec>& specs, const std::string& key
         v[i] += it->second[i] * it->second[i];
       }
     }
-  }
-  return v;
-}
-
-Vec clampVec(Vec v, double lo, double hi)
-{
-  for (double& a : v)
-  {
-    a = std::max(lo, std::min(hi, a));
   }
   return v;
 }
@@ -564,6 +556,28 @@ struct FitContext
   std::vector<FitStats> run_stats;
   std::optional<AllanExcess> allan;  ///< none when the recording is too short for one tau
   LineSearch line_search;
+  /// Parameters of the fitter running now that its search range stopped (bounded()).
+  mutable std::vector<std::string> at_limit;
+
+  /// v clamped to [lo, hi]. An element beyond a bound other than 0 is noted in at_limit: the
+  /// search range, not the data, decided it. (A density or amplitude estimated below 0 means
+  /// none, not a limit.)
+  Vec bounded(const std::string& name, Vec v, double lo, double hi) const
+  {
+    for (std::size_t i = 0; i < v.size(); ++i)
+    {
+      const double bound = v[i] < lo ? lo : v[i] > hi ? hi : v[i];
+      if (bound != v[i] && bound != 0.0)
+      {
+        std::ostringstream note;
+        note << name << (v.size() > 1 ? "[" + std::to_string(i) + "]" : "") << " = " << v[i]
+             << ", held at its search limit " << bound;
+        at_limit.push_back(note.str());
+      }
+      v[i] = bound;
+    }
+    return v;
+  }
 
   /// A statistic of the recording against the ensemble's mean and spread.
   template <typename F>
@@ -731,8 +745,8 @@ std::optional<Fit> fitConstantBias(const FitContext& context)
   }
   addPresent(existing(context.scenario, "constant_bias"), "accel", "gyro", &acc, &gyr);
   sim::EffectSpec e{ "constant_bias", true, {} };
-  e.params["accel"] = clampVec(acc, -100, 100);
-  e.params["gyro"] = clampVec(gyr, -10, 10);
+  e.params["accel"] = context.bounded("accel", acc, -100, 100);
+  e.params["gyro"] = context.bounded("gyro", gyr, -10, 10);
   return Fit{ { e }, "mean of real minus mean of the ensemble, per axis" };
 }
 
@@ -765,8 +779,8 @@ std::optional<Fit> fitWhiteNoise(const FitContext& context)
     return std::nullopt;
   }
   sim::EffectSpec e{ "white_noise", true, {} };
-  e.params["accel_density"] = clampVec(acc, 0, 10);
-  e.params["gyro_density"] = clampVec(gyr, 0, 10);
+  e.params["accel_density"] = context.bounded("accel_density", acc, 0, 10);
+  e.params["gyro_density"] = context.bounded("gyro_density", gyr, 0, 10);
   return Fit{ { e }, "PSD floor (upper half band): density^2 += (P_real - P_sim) / 2" };
 }
 
@@ -811,8 +825,8 @@ std::optional<Fit> fitBiasRandomWalk(const FitContext& context)
     gyr[i] = std::sqrt(gyr[i] * gyr[i] + g2[i]);
   }
   sim::EffectSpec e{ "bias_random_walk", true, {} };
-  e.params["accel_density"] = clampVec(acc, 0, 10);
-  e.params["gyro_density"] = clampVec(gyr, 0, 10);
+  e.params["accel_density"] = context.bounded("accel_density", acc, 0, 10);
+  e.params["gyro_density"] = context.bounded("gyro_density", gyr, 0, 10);
   return Fit{ { e }, "Allan variance excess at the 3 longest taus = K^2 tau / 3" };
 }
 
@@ -891,9 +905,15 @@ std::optional<Fit> fitBiasInstability(const FitContext& context)
   }
   std::vector<sim::EffectSpec> specs = existing(context.scenario, "bias_instability");
   sim::EffectSpec e{ "bias_instability", true, {} };
-  e.params["accel_sigma"] = clampVec(Vec(best_sigma.begin(), best_sigma.begin() + 3), 0, 100);
-  e.params["gyro_sigma"] = clampVec(Vec(best_sigma.begin() + 3, best_sigma.end()), 0, 10);
+  e.params["accel_sigma"] = context.bounded("accel_sigma", Vec(best_sigma.begin(), best_sigma.begin() + 3), 0, 100);
+  e.params["gyro_sigma"] = context.bounded("gyro_sigma", Vec(best_sigma.begin() + 3, best_sigma.end()), 0, 10);
   e.params["correlation_time"] = { std::max(1e-3, best_tc) };
+  if (best_tc < 3.0 / context.rate || best_tc * std::sqrt(2.0) > 2.0 * span)
+  {
+    std::ostringstream note;
+    note << "correlation_time = " << best_tc << ", an end of its search grid (2 samples to twice the span)";
+    context.at_limit.push_back(note.str());
+  }
   specs.push_back(e);
   return Fit{ specs, "Allan variance excess fitted by a Gauss-Markov curve (grid over correlation time)" };
 }
@@ -956,8 +976,8 @@ std::optional<Fit> fitScaleFactor(const FitContext& context)
     gyr[i] = g0[i] * (1.0 + gyr[i]) - 1.0;
   }
   sim::EffectSpec e{ "scale_factor", true, {} };
-  e.params["accel"] = clampVec(acc, -0.5, 0.5);
-  e.params["gyro"] = clampVec(gyr, -0.5, 0.5);
+  e.params["accel"] = context.bounded("accel", acc, -0.5, 0.5);
+  e.params["gyro"] = context.bounded("gyro", gyr, -0.5, 0.5);
   return Fit{ { e }, "sqrt of motion-band power ratio real / ensemble" };
 }
 
@@ -1080,8 +1100,8 @@ std::optional<Fit> fitMisalignment(const FitContext& context)
   }
   addPresent(existing(context.scenario, "misalignment"), "accel", "gyro", &acc, &gyr);
   sim::EffectSpec e{ "misalignment", true, {} };
-  e.params["accel"] = clampVec(acc, -0.5, 0.5);
-  e.params["gyro"] = clampVec(gyr, -0.5, 0.5);
+  e.params["accel"] = context.bounded("accel", acc, -0.5, 0.5);
+  e.params["gyro"] = context.bounded("gyro", gyr, -0.5, 0.5);
   return Fit{ { e }, "cross-spectrum excess / auto-spectrum in the motion band of each axis" };
 }
 
@@ -1131,7 +1151,7 @@ std::optional<Fit> fitLeverArm(const FitContext& context)
     d[i] += r0[i];
   }
   sim::EffectSpec e{ "lever_arm", true, {} };
-  e.params["offset"] = clampVec(d, -100, 100);
+  e.params["offset"] = context.bounded("offset", d, -100, 100);
   return Fit{ { e },
               "least squares of accel on alpha x r + omega x (omega x r) (omega from the gyro), real minus ensemble" };
 }
@@ -1161,10 +1181,10 @@ std::optional<Fit> fitPeriodicBias(const FitContext& context)
   }
   std::vector<sim::EffectSpec> specs = existing(context.scenario, "periodic_bias");
   sim::EffectSpec e{ "periodic_bias", true, {} };
-  e.params["accel_amplitude"] = clampVec(Vec(amp.begin(), amp.begin() + 3), 0, 100);
-  e.params["gyro_amplitude"] = clampVec(Vec(amp.begin() + 3, amp.end()), 0, 10);
-  e.params["accel_period"] = clampVec(Vec(per.begin(), per.begin() + 3), 1e-3, 1e7);
-  e.params["gyro_period"] = clampVec(Vec(per.begin() + 3, per.end()), 1e-3, 1e7);
+  e.params["accel_amplitude"] = context.bounded("accel_amplitude", Vec(amp.begin(), amp.begin() + 3), 0, 100);
+  e.params["gyro_amplitude"] = context.bounded("gyro_amplitude", Vec(amp.begin() + 3, amp.end()), 0, 10);
+  e.params["accel_period"] = context.bounded("accel_period", Vec(per.begin(), per.begin() + 3), 1e-3, 1e7);
+  e.params["gyro_period"] = context.bounded("gyro_period", Vec(per.begin() + 3, per.end()), 1e-3, 1e7);
   e.params["accel_phase"] = Vec(ph.begin(), ph.begin() + 3);
   e.params["gyro_phase"] = Vec(ph.begin() + 3, ph.end());
   specs.push_back(e);
@@ -1231,8 +1251,8 @@ std::optional<Fit> fitVibration(const FitContext& context)
   std::vector<sim::EffectSpec> specs = existing(context.scenario, "vibration");
   sim::EffectSpec e{ "vibration", true, {} };
   e.params["frequency"] = { f };
-  e.params["accel_amplitude"] = clampVec(Vec(amp.begin(), amp.begin() + 3), -100, 100);
-  e.params["gyro_amplitude"] = clampVec(Vec(amp.begin() + 3, amp.end()), -10, 10);
+  e.params["accel_amplitude"] = context.bounded("accel_amplitude", Vec(amp.begin(), amp.begin() + 3), -100, 100);
+  e.params["gyro_amplitude"] = context.bounded("gyro_amplitude", Vec(amp.begin() + 3, amp.end()), -10, 10);
   e.params["phase"] = { phase };
   e.params["bandwidth"] = { bw };
   specs.push_back(e);
@@ -1260,8 +1280,8 @@ std::optional<Fit> fitThermalDrift(const FitContext& context)
     ref = context.scenario.temperature.mean;  // no information on the reference: no constant part
   }
   sim::EffectSpec e{ "thermal_drift", true, {} };
-  e.params["accel_coefficient"] = clampVec(acc, -1, 1);
-  e.params["gyro_coefficient"] = clampVec(gyr, -1, 1);
+  e.params["accel_coefficient"] = context.bounded("accel_coefficient", acc, -1, 1);
+  e.params["gyro_coefficient"] = context.bounded("gyro_coefficient", gyr, -1, 1);
   e.params["reference_temperature"] = { ref };
   return Fit{ { e }, "slope of 32 block means against temperature, real minus ensemble" };
 }
@@ -1344,8 +1364,8 @@ std::optional<Fit> fitQuantization(const FitContext& context)
     return std::nullopt;
   }
   sim::EffectSpec e{ "quantization", true, {} };
-  e.params["accel_step"] = clampVec(Vec(step.begin(), step.begin() + 3), 0, 100);
-  e.params["gyro_step"] = clampVec(Vec(step.begin() + 3, step.end()), 0, 10);
+  e.params["accel_step"] = context.bounded("accel_step", Vec(step.begin(), step.begin() + 3), 0, 100);
+  e.params["gyro_step"] = context.bounded("gyro_step", Vec(step.begin() + 3, step.end()), 0, 10);
   return Fit{ { e }, "values on a lattice: step = smallest gap between distinct values" };
 }
 
@@ -1472,9 +1492,14 @@ std::vector<Candidate> fitCandidates(const Recording& real_fit, const std::vecto
   context.line_search = lineSearch(context);
   for (const Fitter& fitter : kFitters)
   {
+    context.at_limit.clear();
     if (std::optional<Fit> fit = fitter.fit(context))
     {
       out.push_back(make(fitter.effect, std::move(fit->specs), fit->note));
+      for (const std::string& limit : context.at_limit)
+      {
+        out.back().at_limit.push_back(std::string(fitter.effect) + "." + limit);
+      }
     }
   }
   return out;

@@ -96,32 +96,24 @@ MotionSummary summariseMotion(const Recording& r)
   const int segment = std::min<int>(static_cast<int>(n), static_cast<int>(std::lround(seconds * rate)));
   if (rate <= 0.0 || segment < 64 || segment * 1.0 / rate < 1.0 / kWaveBandLow)
     return m;
-  // Heave spectrum = acceleration spectrum / (2 pi f)^4 over the wave band.
+  // Heave spectrum = acceleration spectrum / (2 pi f)^4 over the wave band. The peak frequency
+  // is the centroid of the spectrum to the fourth power: the top of a single peak, the middle of
+  // a broad plateau whose highest bin wanders with the resolution (Young 1995).
   const Psd psd = welch(vertical, rate, segment);
-  const auto heave = [&psd](std::size_t k) { return psd.power[k] / std::pow(2.0 * M_PI * k * psd.df, 4); };
-  double m0 = 0.0;
-  std::size_t peak = 0;
+  double m0 = 0.0, s4 = 0.0, f_s4 = 0.0;
   for (std::size_t k = 1; k < psd.power.size(); ++k)
   {
     const double f = k * psd.df;
     if (f < kWaveBandLow || f > kWaveBandHigh)
       continue;
-    m0 += heave(k) * psd.df;
-    if (peak == 0 || heave(k) > heave(peak))
-      peak = k;
+    const double heave = psd.power[k] / std::pow(2.0 * M_PI * f, 4);
+    m0 += heave * psd.df;
+    s4 += std::pow(heave, 4);
+    f_s4 += f * std::pow(heave, 4);
   }
   m.wave_height = 4.0 * std::sqrt(m0);
-  if (peak > 1 && peak + 1 < psd.power.size() && heave(peak) > 0.0)
-  {
-    // The peak between bins: a parabola through the log heave of the peak bin and its neighbours.
-    const double left = std::log(heave(peak - 1) + 1e-300), centre = std::log(heave(peak)),
-                 right = std::log(heave(peak + 1) + 1e-300);
-    const double curvature = left - 2.0 * centre + right;
-    const double offset = curvature < 0.0 ? std::clamp(0.5 * (left - right) / curvature, -0.5, 0.5) : 0.0;
-    m.peak_period = 1.0 / ((peak + offset) * psd.df);
-  }
-  else if (peak > 0)
-    m.peak_period = 1.0 / (peak * psd.df);
+  if (s4 > 0.0 && f_s4 > 0.0)
+    m.peak_period = s4 / f_s4;
   return m;
 }
 

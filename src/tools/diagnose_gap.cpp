@@ -365,7 +365,12 @@ std::string reportMarkdown(const gap::Report& rep, const Options& o, bool plots)
     const auto& c = rep.ranking[i];
     std::snprintf(buf, sizeof(buf), "| %zu | %s | %.3g | %.3g | %.0f %% | `", i + 1, c.effect.c_str(), c.gap_before,
                   c.gap_after, 100 * c.shrink);
-    md << buf << c.params.dump() << "` |\n";
+    md << buf << c.params.dump() << "`";
+    for (const std::string& limit : c.at_limit)
+    {
+      md << "<br>at a search limit: " << limit;
+    }
+    md << " |\n";
   }
   md << "\n## 3. How far it shrinks (withheld part, the places of largest departure)\n\n";
   md << "| axis | quantity | band / tau | segment | z before | z after |\n|---|---|---|---|---|---|\n";

@@ -228,6 +228,7 @@ TEST(GapDiagnose, NamesAWithheldVibrationAndShrinksTheGap)
   EXPECT_EQ(rep.verdict_effect, "vibration") << gap::reportSummary(rep);
   EXPECT_GT(rep.shrink_withheld, 0.7);
   EXPECT_GT(rep.confidence, 0.5);
+  EXPECT_TRUE(rep.ranking.at(0).at_limit.empty()) << rep.ranking[0].at_limit.front();
   ASSERT_FALSE(rep.where.empty());
   const nlohmann::ordered_json json = gap::reportJson(rep);
   EXPECT_FALSE(json.at("where").empty());
@@ -263,6 +264,33 @@ TEST(GapDiagnose, NoConfidentVerdictWithoutAWithheldEffect)
   gap::Recording real = gap::simulateRecording(base, 99991);
   const gap::Report rep = gap::diagnose(real, base, gap::DiagnoseOptions());
   EXPECT_LT(rep.confidence, 0.5) << gap::reportSummary(rep);
+}
+
+TEST(GapDiagnose, AFitStoppedByItsSearchRangeIsFlaggedAndNotConfident)
+{
+  // Gyro readings 1.8 times too large (a wrong count scale): a scale factor error of 0.8, beyond
+  // the fit's range of +-0.5.
+  const sim::Scenario base = sinusoidBase();
+  gap::Recording real = gap::simulateRecording(base, 5151);
+  real.data.rightCols(3) *= 1.8;
+  const gap::Report rep = gap::diagnose(real, base, gap::DiagnoseOptions());
+  bool seen = false;
+  for (const gap::Candidate& c : rep.ranking)
+  {
+    if (c.effect == "scale_factor")
+    {
+      seen = true;
+      ASSERT_FALSE(c.at_limit.empty()) << c.params.dump();
+      EXPECT_NE(c.at_limit.front().find("search limit 0.5"), std::string::npos) << c.at_limit.front();
+    }
+  }
+  EXPECT_TRUE(seen) << gap::reportSummary(rep);
+  if (!rep.ranking.empty() && !rep.ranking[0].at_limit.empty() && rep.verdict_effect == rep.ranking[0].effect)
+  {
+    EXPECT_LT(rep.confidence, 0.5) << gap::reportSummary(rep);
+    EXPECT_NE(rep.verdict_text.find("search limit"), std::string::npos) << rep.verdict_text;
+  }
+  EXPECT_TRUE(gap::reportJson(rep).at("ranking")[0].contains("at_limit"));
 }
 
 TEST(GapValidate, SmallFormMeetsTheTargets)

@@ -284,6 +284,10 @@ struct Candidate
   double gap_after = 0.0;
   double shrink = 0.0;          ///< (before - after) / (before - typical null gap), at most 1
   std::vector<double> z_after;  ///< withheld z-scores with the effect
+  /// Fitted parameters that the fitter's search range stopped, each "name = value, ...": the
+  /// effect may be larger than the fit says, or another one. A verdict on such a fit is never
+  /// confident (confidence below 0.5).
+  std::vector<std::string> at_limit;
 };
 
 // ---------------------------------------------------------------------------------------------
@@ -296,7 +300,7 @@ struct MotionSummary
   double pitch = 0.0;        ///< [rad]
   double heading = NAN;      ///< mean heading from the reported orientation (NaN without) [rad]
   double wave_height = 0.0;  ///< 4 sqrt(m0) of the heave in the 2-25 s band [m]
-  double peak_period = 0.0;  ///< period of the heave spectrum's peak in that band [s] (0: none)
+  double peak_period = 0.0;  ///< 1 / centroid of the heave spectrum^4 in that band [s] (0: none)
 };
 
 /// Heave from the vertical specific force (through the reported orientation when there is one,
