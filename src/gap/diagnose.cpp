@@ -244,19 +244,29 @@ double heldGap(const DiagnoseContext& context, const Report& rep, const std::vec
   return gapOf(zScores(rep.real_held, ensembleStats(members, rep.layout_held)));
 }
 
-/// 0. Motion: a tilt, heading or sea state of its own is fitted before any sensor effect; the fit
-/// that brings the withheld part closest becomes the scenario of the base ensemble.
+/// Directional spreadings the motion stage tries on a sea whose responses it fitted [rad].
+constexpr double kSpreadingTrials[] = { 0.4, 0.8 };
+
+/// 0. Motion: a tilt, heading or sea state of its own is fitted before any sensor effect, then the
+/// sea's responses and spreading; the fit that brings the withheld part closest becomes the
+/// scenario of the base ensemble.
 void motionStage(DiagnoseContext* context, BaseEnsemble* base, Report* rep)
 {
   rep->motion = fitMotion(context->real, context->scenario, base->runs);
   if (!rep->motion.differs)
   {
-    return;
+    std::vector<std::string> unused;
+    if (!fitWaveResponses(context->real, context->scenario, base->runs, &unused))
+    {
+      return;
+    }
+    rep->motion.differs = true;
   }
   rep->motion.gap_before = heldGap(*context, *rep, base->runs);
   double best = rep->motion.gap_before;
-  for (const MotionCandidate& candidate : rep->motion.candidates)
-  {
+  std::vector<Recording> best_runs = base->runs;
+  // Each candidate's ensemble, and its withheld gap; the closest is adopted.
+  const auto consider = [&](const MotionCandidate& candidate) {
     std::vector<Recording> runs(context->runs);
     parallelFor(context->runs, context->opt.threads,
                 [&](int i) { runs[i] = simulateRecording(candidate.scenario, context->seed(i)); });
@@ -266,6 +276,47 @@ void motionStage(DiagnoseContext* context, BaseEnsemble* base, Report* rep)
       best = gap;
       rep->motion.adopted = candidate.what;
       rep->motion.fitted = candidate.scenario;
+      best_runs = std::move(runs);
+    }
+  };
+  for (const MotionCandidate& candidate : rep->motion.candidates)
+  {
+    consider(candidate);
+  }
+  // Then the sea's responses per degree of freedom against the ensemble of that fit, and its
+  // directional spreading (which decorrelates roll, pitch and yaw).
+  const sim::Scenario first = rep->motion.adopted.empty() ? context->scenario : rep->motion.fitted;
+  const std::string first_what = rep->motion.adopted;
+  const auto after = [&first_what](const std::string& what) {
+    return first_what.empty() ? what : first_what + ", " + what;
+  };
+  if (std::optional<MotionCandidate> responses =
+          fitWaveResponses(context->real, first, best_runs, &rep->motion.findings))
+  {
+    responses->what = after(responses->what);
+    rep->motion.candidates.push_back(*responses);
+    consider(*responses);
+    const sim::Scenario shaped = rep->motion.fitted;
+    const std::string shaped_what = rep->motion.adopted;
+    for (double spreading : kSpreadingTrials)
+    {
+      MotionCandidate spread{ (shaped_what.empty() ? "" : shaped_what + ", ") + "spreading " + num(spreading) + " rad",
+                              shaped };
+      for (sim::WaveSystem& system : spread.scenario.motion.sea.systems)
+      {
+        system.spreading = spreading;
+      }
+      rep->motion.candidates.push_back(spread);
+      consider(spread);
+    }
+    // Once more: the responses against the ensemble of the spreading adopted.
+    const std::string spread_what = rep->motion.adopted;
+    if (std::optional<MotionCandidate> again =
+            fitWaveResponses(context->real, rep->motion.fitted, best_runs, &rep->motion.findings))
+    {
+      again->what = spread_what + ", wave responses again";
+      rep->motion.candidates.push_back(*again);
+      consider(*again);
     }
   }
   if (!rep->motion.adopted.empty())

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <optional>
 
 #include "periodic_bias_compensation/common/numeric.h"
 #include "periodic_bias_compensation/gap/gap.h"
@@ -22,6 +23,8 @@ constexpr double kMaxWaveSegment = 400.0;
 constexpr double kMinWaveHeight = 0.05;
 /// A quantity differs when the relative difference exceeds this and three ensemble spreads.
 constexpr double kSeaTolerance = 0.15;
+/// The largest response factor a fit gives a degree of freedom [-].
+constexpr double kMaxResponse = 5.0;
 /// A standing tilt or heading differs beyond this and three ensemble spreads [rad].
 constexpr double kAngleTolerance = 0.005;
 constexpr double kHeadingTolerance = 0.05;
@@ -74,13 +77,16 @@ MotionSummary summariseMotion(const Recording& r)
   const bool oriented = r.has_orientation && r.orientation.size() == static_cast<std::size_t>(n);
   const Eigen::Vector3d up = mean_force.normalized();
   Eigen::VectorXd vertical(n);
+  Eigen::MatrixXd world(oriented ? n : 0, 2);  // horizontal specific force, ENU
   Eigen::Vector2d heading = Eigen::Vector2d::Zero();
   for (Eigen::Index i = 0; i < n; ++i)
   {
     const Eigen::Vector3d f = r.data.row(i).head<3>().transpose();
     if (oriented)
     {
-      vertical[i] = (r.orientation[i] * f).z();
+      const Eigen::Vector3d w = r.orientation[i] * f;
+      vertical[i] = w.z();
+      world.row(i) = w.head<2>().transpose();
       const Eigen::Vector3d x_axis = r.orientation[i] * Eigen::Vector3d::UnitX();
       heading += Eigen::Vector2d(x_axis.x(), x_axis.y());
     }
@@ -100,6 +106,30 @@ MotionSummary summariseMotion(const Recording& r)
   // is the centroid of the spectrum to the fourth power: the top of a single peak, the middle of
   // a broad plateau whose highest bin wanders with the resolution (Young 1995).
   const Psd psd = welch(vertical, rate, segment);
+  // Wave-band RMS per degree of freedom: the horizontal specific force along and across the mean
+  // heading (world frame: no gravity in it), else the sensor's x and y; the gyro's three axes.
+  const auto band_rms = [&](const Eigen::VectorXd& x) {
+    const Psd p = welch(x.array() - x.mean(), rate, segment);
+    double power = 0.0;
+    for (std::size_t k = 1; k < p.power.size(); ++k)
+      if (k * p.df >= kWaveBandLow && k * p.df <= kWaveBandHigh)
+        power += p.power[k] * p.df;
+    return std::sqrt(power);
+  };
+  if (oriented)
+  {
+    const double c = std::cos(m.heading), s = std::sin(m.heading);
+    m.wave_rms[0] = band_rms(c * world.col(0) + s * world.col(1));
+    m.wave_rms[1] = band_rms(-s * world.col(0) + c * world.col(1));
+  }
+  else
+  {
+    m.wave_rms[0] = band_rms(r.data.col(0));
+    m.wave_rms[1] = band_rms(r.data.col(1));
+  }
+  m.wave_rms[2] = band_rms(vertical);
+  for (int axis = 0; axis < 3; ++axis)
+    m.wave_rms[3 + axis] = band_rms(r.data.col(3 + axis));
   double m0 = 0.0, s4 = 0.0, f_s4 = 0.0;
   for (std::size_t k = 1; k < psd.power.size(); ++k)
   {
@@ -228,6 +258,38 @@ MotionFit fitMotion(const Recording& real, const sim::Scenario& scenario, const 
   if (sea_fittable)
     fit.candidates.push_back({ "sea state", sea });
   return fit;
+}
+
+std::optional<MotionCandidate> fitWaveResponses(const Recording& real, const sim::Scenario& scenario,
+                                                const std::vector<Recording>& runs, std::vector<std::string>* findings)
+{
+  if (!hasSea(scenario) || runs.empty())
+    return std::nullopt;
+  const MotionSummary r = summariseMotion(real);
+  std::vector<MotionSummary> sims;
+  for (const Recording& run : runs)
+    sims.push_back(summariseMotion(run));
+  static const char* const kDof[6] = { "surge", "sway", "heave", "roll", "pitch", "yaw" };
+  MotionCandidate candidate{ "wave responses", scenario };
+  std::string changed;
+  for (int d = 0; d < 6; ++d)
+  {
+    if (d == 2)
+      continue;  // the heave is the sea state's
+    const Spread sim = spreadOf(sims, [d](const MotionSummary& m) { return m.wave_rms[d]; });
+    const double ratio = r.wave_rms[d] / std::max(sim.mean, 1e-12);
+    if (!(sim.mean > 0.0) || std::abs(std::log(std::max(ratio, 1e-9))) <= std::log1p(kSeaTolerance) ||
+        std::abs(r.wave_rms[d] - sim.mean) <= 3.0 * sim.sd)
+      continue;
+    double& response = candidate.scenario.motion.sea.response[d];
+    const double before = response;
+    response = std::clamp(response * ratio, 0.0, kMaxResponse);
+    changed += (changed.empty() ? "" : ", ") + std::string(kDof[d]) + " " + format("%.3g -> %.3g", before, response);
+  }
+  if (changed.empty())
+    return std::nullopt;
+  findings->push_back("wave responses (wave-band RMS per degree of freedom against the ensemble's): " + changed);
+  return candidate;
 }
 
 }  // namespace periodic_bias_compensation::gap

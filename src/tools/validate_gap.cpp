@@ -5,7 +5,7 @@
 // withheld effect check that no confident verdict is given.
 //
 //   validate_gap [--small] [--seeds N] [--duration S] [--rate HZ] [--md FILE] [--json FILE] [--quiet]
-//                [--effect NAME] [--motion static|sinusoids|sea] [--verbose] [--bench-hours H]
+//                [--effect NAME] [--motion static|sinusoids|sea|sea-foreign|hull-foreign] [--verbose] [--bench-hours H]
 //
 // --md and --json are renamed into place when complete (tools/output_file.h).
 // Exit status: 0 targets met, 3 targets missed (the tables are printed either way), 1 error,
@@ -53,6 +53,8 @@ struct Options
   double bench_hours = 0.0;
 };
 
+/// The scenario the diagnosis is given for a motion: "static", "sinusoids", or otherwise ("sea",
+/// "hull") an irregular sea.
 sim::Scenario baseScenario(const std::string& motion, double rate, double duration)
 {
   sim::Scenario s;
@@ -308,20 +310,116 @@ const std::vector<std::string>& foreignEffects()
   return e;
 }
 
+/// JONSWAP spectral density (gamma 3.3) at f [Hz] for the peak frequency fp [Hz], unscaled.
+double jonswapDensity(double f, double fp)
+{
+  const double sigma = f <= fp ? 0.07 : 0.09;
+  return std::pow(f, -5.0) * std::exp(-1.25 * std::pow(fp / f, 4.0)) *
+         std::pow(3.3, std::exp(-std::pow(f - fp, 2.0) / (2.0 * sigma * sigma * fp * fp)));
+}
+
+/// Replaces the samples and reported orientation of r by those of a hull in a sea written here,
+/// not by the simulator: long-crested JONSWAP components (gamma 3.3, 200 between 0.04 and
+/// 0.5 Hz, random phases; Hs 1.5-2.5 m and Tp 7-11 s drawn from the seed), each degree of freedom
+/// with a gain and a phase of its own per component (surge, sway, roll and pitch are not locked
+/// to the heave as a wave slope would lock them), a yaw the sea induces (0.02 rad), a standing
+/// list and trim of 0.01-0.03 rad either way and a heading drawn. The IMU sits at the hull's
+/// reference point: specific force R^T (p'' + g z), body rate from the Euler angles' rates
+/// (z-y-x), all derivatives analytic.
+void hullMotion(std::uint64_t seed, gap::Recording* r)
+{
+  constexpr double kTwoPi = 2.0 * M_PI, kG = 9.80665;
+  std::mt19937_64 rng(seed * 2654435761ULL + 99);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  const double hs = 1.5 + u(rng), fp = 1.0 / (7.0 + 4.0 * u(rng));
+  const double list = (u(rng) < 0.5 ? -1.0 : 1.0) * (0.01 + 0.02 * u(rng));
+  const double trim = (u(rng) < 0.5 ? -1.0 : 1.0) * (0.01 + 0.02 * u(rng));
+  const double heading = kTwoPi * u(rng) - M_PI;
+  constexpr int kComponents = 200;
+  constexpr int kDof = 6;  // surge, sway, heave, roll, pitch, yaw
+  const double df = (0.5 - 0.04) / kComponents;
+  std::vector<double> w(kComponents), density(kComponents);
+  std::vector<std::array<double, kDof>> gain(kComponents), phase(kComponents);
+  double m0 = 0.0;
+  for (int k = 0; k < kComponents; ++k)
+  {
+    const double f = 0.04 + (k + u(rng)) * df;
+    w[k] = kTwoPi * f;
+    density[k] = jonswapDensity(f, fp);
+    m0 += density[k] * df;
+    const double slope = w[k] * w[k] / kG;  // wave slope per metre of amplitude [rad/m]
+    gain[k] = { 0.3 + 0.3 * u(rng),           0.2 + 0.3 * u(rng),           1.0,
+                (0.6 + 0.4 * u(rng)) * slope, (0.3 + 0.3 * u(rng)) * slope, 0.2 * slope };
+    for (double& p : phase[k])
+    {
+      p = kTwoPi * u(rng);
+    }
+  }
+  for (int k = 0; k < kComponents; ++k)
+  {
+    const double amplitude = std::sqrt(2.0 * density[k] * df * hs * hs / 16.0 / m0);  // Hs = 4 sqrt(m0)
+    for (double& g : gain[k])
+    {
+      g *= amplitude;
+    }
+  }
+  const double t0 = r->stamp.empty() ? 0.0 : r->stamp.front();
+  for (std::size_t i = 0; i < r->size(); ++i)
+  {
+    const double t = r->stamp[i] - t0;
+    std::array<double, kDof> value{}, rate{}, acceleration{};
+    for (int k = 0; k < kComponents; ++k)
+    {
+      for (int d = 0; d < kDof; ++d)
+      {
+        const double s = std::sin(w[k] * t + phase[k][d]), c = std::cos(w[k] * t + phase[k][d]);
+        value[d] += gain[k][d] * s;
+        rate[d] += gain[k][d] * w[k] * c;
+        acceleration[d] -= gain[k][d] * w[k] * w[k] * s;
+      }
+    }
+    const double roll = list + value[3], pitch = trim + value[4], yaw = heading + value[5];
+    const Eigen::Quaterniond q = Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()) *
+                                 Eigen::AngleAxisd(pitch, Eigen::Vector3d::UnitY()) *
+                                 Eigen::AngleAxisd(roll, Eigen::Vector3d::UnitX());
+    const Eigen::Vector3d world(acceleration[0], acceleration[1], acceleration[2] + kG);
+    r->data.row(i).head<3>() = (q.conjugate() * world).transpose();
+    const double sr = std::sin(roll), cr = std::cos(roll), sp = std::sin(pitch), cp = std::cos(pitch);
+    r->data(i, 3) = rate[3] - sp * rate[5];
+    r->data(i, 4) = cr * rate[4] + sr * cp * rate[5];
+    r->data(i, 5) = -sr * rate[4] + cr * cp * rate[5];
+    if (r->has_orientation)
+    {
+      r->orientation[i] = q;
+    }
+  }
+  r->truth = gap::TruthTrack();
+}
+
 /// A "real" recording made WITHOUT the simulator's sensor model or random streams: the
 /// simulator's noise-free motion (another seed family; on a sea 3x as many wave components, so
-/// the motion's details differ) plus the scenario's bias and white noise and the withheld
-/// effect, all written here with std::mt19937_64 and std::normal_distribution. The same seed
-/// gives the same noise whatever the effect (the twin of the detectability test).
-gap::Recording foreignRecording(const sim::Scenario& base, const std::string& effect, double k, std::uint64_t seed)
+/// the motion's details differ) or, with `hull`, the motion of hullMotion(), plus the
+/// scenario's bias and white noise and the withheld effect, all written here with
+/// std::mt19937_64 and std::normal_distribution. The same seed gives the same motion and noise
+/// whatever the effect (the twin of the detectability test).
+gap::Recording foreignRecording(const sim::Scenario& base, const std::string& effect, double k, std::uint64_t seed,
+                                bool hull)
 {
   sim::Scenario clean = base;
   clean.effects.clear();
-  if (clean.motion.type == sim::MotionType::kSea)
+  if (hull)
+  {
+    clean.motion = sim::Motion();  // static: only the stamps, orientation and temperature are kept
+  }
+  else if (clean.motion.type == sim::MotionType::kSea)
   {
     clean.motion.sea.components *= 3;
   }
   gap::Recording r = gap::simulateRecording(clean, 900000 + seed);
+  if (hull)
+  {
+    hullMotion(seed, &r);
+  }
   std::mt19937_64 noise_rng(seed * 7919 + 13), walk_rng(seed * 104729 + 7);
   std::normal_distribution<double> n01;
   const double dt = 1.0 / base.rate;
@@ -424,9 +522,10 @@ struct Grid
 
 Grid caseGrid(const Options& opt)
 {
+  // "hull-foreign": a hull in a sea of hullMotion() (not the simulator's), against the sea scenario.
   // "sea-foreign": the same sea, but "real" is written by foreignRecording() (another noise
   // generator, other motion details), for the effects it knows.
-  Grid grid = { { "static", "sinusoids", "sea", "sea-foreign" }, { 1.0, 0.3 }, opt.seeds };
+  Grid grid = { { "static", "sinusoids", "sea", "sea-foreign", "hull-foreign" }, { 1.0, 0.3 }, opt.seeds };
   if (opt.small)
   {
     grid.motions = { "sinusoids", "sea-foreign" };
@@ -440,10 +539,16 @@ Grid caseGrid(const Options& opt)
   return grid;
 }
 
-/// Whether foreignRecording() writes the "real" recording of a motion ("sea-foreign").
+/// Whether foreignRecording() writes the "real" recording of a motion ("sea-foreign", "hull-foreign").
 bool isForeign(const std::string& motion)
 {
   return motion.size() > 8 && motion.substr(motion.size() - 8) == "-foreign";
+}
+
+/// Whether the motion is hullMotion()'s ("hull-foreign"; its scenario is the sea's).
+bool isHull(const std::string& motion)
+{
+  return motion.rfind("hull", 0) == 0;
 }
 
 /// The (effect, size) cases of one motion, those without a withheld effect last.
@@ -550,14 +655,14 @@ CaseResult runCase(const Case& c, const sim::Scenario& base, bool verbose)
   cr.why = sameSignal(c.effect, c.motion);
   try
   {
-    gap::Recording real =
-        foreign ? foreignRecording(base, c.effect, c.k, c.seed) : gap::simulateRecording(real_s, c.seed);
+    gap::Recording real = foreign ? foreignRecording(base, c.effect, c.k, c.seed, isHull(c.motion))
+                                  : gap::simulateRecording(real_s, c.seed);
     real.source = "validate " + c.motion + " " + c.effect;
     const gap::Report rep = gap::diagnose(real, base, dopt);
     if (c.effect != "none")
     {
-      const gap::Recording twin =
-          foreign ? foreignRecording(base, "none", 0.0, c.seed) : gap::simulateRecording(base, c.seed);
+      const gap::Recording twin = foreign ? foreignRecording(base, "none", 0.0, c.seed, isHull(c.motion))
+                                          : gap::simulateRecording(base, c.seed);
       const Detectability d = effectShift(real, twin, c.effect, rep, dopt.fit_fraction);
       cr.effect_gap = d.gap;
       cr.effect_max_z = d.max_z;

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -301,6 +302,11 @@ struct MotionSummary
   double heading = NAN;      ///< mean heading from the reported orientation (NaN without) [rad]
   double wave_height = 0.0;  ///< 4 sqrt(m0) of the heave in the 2-25 s band [m]
   double peak_period = 0.0;  ///< 1 / centroid of the heave spectrum^4 in that band [s] (0: none)
+  /// RMS in that band per degree of freedom (surge, sway, heave, roll, pitch, yaw): the
+  /// horizontal specific force along and across the mean heading (through the reported
+  /// orientation; without one the sensor's x and y) [m/s^2], the vertical one [m/s^2], the
+  /// gyro's x, y, z [rad/s].
+  std::array<double, 6> wave_rms{};
 };
 
 /// Heave from the vertical specific force (through the reported orientation when there is one,
@@ -336,6 +342,13 @@ struct MotionFit
 /// period rescaled alike. `fitted` is left as given: the caller adopts a candidate (diagnose:
 /// the one that brings the withheld part closest, if any does).
 MotionFit fitMotion(const Recording& real, const sim::Scenario& scenario, const std::vector<Recording>& runs);
+
+/// The scenario's sea responses (sim::Sea::response) of surge, sway, roll, pitch and yaw scaled
+/// by the recording's wave-band RMS of each over the runs' mean, where it is 15 % and three
+/// spreads off (at most 5); nullopt when none is, or the scenario has no sea. The runs are of
+/// `scenario` (after its sea state is fitted: the heave is left to it). Adds a finding.
+std::optional<MotionCandidate> fitWaveResponses(const Recording& real, const sim::Scenario& scenario,
+                                                const std::vector<Recording>& runs, std::vector<std::string>* findings);
 
 /// Directly visible effect (stamps, lattice, clipping, gaps).
 struct DirectDetection
