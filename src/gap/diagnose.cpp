@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <functional>
 #include <set>
 #include <sstream>
 
@@ -244,8 +245,10 @@ double heldGap(const DiagnoseContext& context, const Report& rep, const std::vec
   return gapOf(zScores(rep.real_held, ensembleStats(members, rep.layout_held)));
 }
 
-/// Directional spreadings the motion stage tries on a sea whose responses it fitted [rad].
-constexpr double kSpreadingTrials[] = { 0.4, 0.8 };
+/// Directional spreadings [rad] and response coherences the motion stage tries on a sea whose
+/// responses it fitted.
+const std::vector<double> kSpreadingTrials = { 0.4, 0.8 };
+const std::vector<double> kCoherenceTrials = { 0.5, 0.0 };
 
 /// 0. Motion: a tilt, heading or sea state of its own is fitted before any sensor effect, then the
 /// sea's responses and spreading; the fit that brings the withheld part closest becomes the
@@ -255,8 +258,10 @@ void motionStage(DiagnoseContext* context, BaseEnsemble* base, Report* rep)
   rep->motion = fitMotion(context->real, context->scenario, base->runs);
   if (!rep->motion.differs)
   {
+    // With the tilt, heading and sea state as the scenario's, only a rotation's response says the
+    // motion differs: surge and sway differences are left to the accelerometer's effects.
     std::vector<std::string> unused;
-    if (!fitWaveResponses(context->real, context->scenario, base->runs, &unused))
+    if (!fitWaveResponses(context->real, context->scenario, base->runs, &unused, true))
     {
       return;
     }
@@ -283,41 +288,45 @@ void motionStage(DiagnoseContext* context, BaseEnsemble* base, Report* rep)
   {
     consider(candidate);
   }
-  // Then the sea's responses per degree of freedom against the ensemble of that fit, and its
-  // directional spreading (which decorrelates roll, pitch and yaw).
-  const sim::Scenario first = rep->motion.adopted.empty() ? context->scenario : rep->motion.fitted;
-  const std::string first_what = rep->motion.adopted;
-  const auto after = [&first_what](const std::string& what) {
-    return first_what.empty() ? what : first_what + ", " + what;
+  // Then the sea's shape: its responses per degree of freedom against the ensemble of that fit,
+  // its directional spreading and its response coherence (both decorrelate surge, sway, roll,
+  // pitch and yaw), and the responses once more.
+  const auto current = [&]() { return rep->motion.adopted.empty() ? context->scenario : rep->motion.fitted; };
+  const auto label = [&](const std::string& what) {
+    return rep->motion.adopted.empty() ? what : rep->motion.adopted + ", " + what;
   };
-  if (std::optional<MotionCandidate> responses =
-          fitWaveResponses(context->real, first, best_runs, &rep->motion.findings))
+  const auto responses = [&]() {
+    std::optional<MotionCandidate> fit = fitWaveResponses(context->real, current(), best_runs, &rep->motion.findings);
+    if (fit)
+    {
+      fit->what = label(fit->what);
+      rep->motion.candidates.push_back(*fit);
+      consider(*fit);
+    }
+    return fit.has_value();
+  };
+  const auto trials = [&](const std::string& what, const std::vector<double>& values,
+                          const std::function<void(double, sim::Sea*)>& set) {
+    const sim::Scenario from = current();
+    const std::string from_label = label(what);
+    for (double value : values)
+    {
+      MotionCandidate candidate{ from_label + " " + num(value), from };
+      set(value, &candidate.scenario.motion.sea);
+      rep->motion.candidates.push_back(candidate);
+      consider(candidate);
+    }
+  };
+  if (responses())
   {
-    responses->what = after(responses->what);
-    rep->motion.candidates.push_back(*responses);
-    consider(*responses);
-    const sim::Scenario shaped = rep->motion.fitted;
-    const std::string shaped_what = rep->motion.adopted;
-    for (double spreading : kSpreadingTrials)
-    {
-      MotionCandidate spread{ (shaped_what.empty() ? "" : shaped_what + ", ") + "spreading " + num(spreading) + " rad",
-                              shaped };
-      for (sim::WaveSystem& system : spread.scenario.motion.sea.systems)
+    trials("spreading [rad]", kSpreadingTrials, [](double v, sim::Sea* sea) {
+      for (sim::WaveSystem& system : sea->systems)
       {
-        system.spreading = spreading;
+        system.spreading = v;
       }
-      rep->motion.candidates.push_back(spread);
-      consider(spread);
-    }
-    // Once more: the responses against the ensemble of the spreading adopted.
-    const std::string spread_what = rep->motion.adopted;
-    if (std::optional<MotionCandidate> again =
-            fitWaveResponses(context->real, rep->motion.fitted, best_runs, &rep->motion.findings))
-    {
-      again->what = spread_what + ", wave responses again";
-      rep->motion.candidates.push_back(*again);
-      consider(*again);
-    }
+    });
+    trials("response coherence", kCoherenceTrials, [](double v, sim::Sea* sea) { sea->response_coherence = v; });
+    responses();
   }
   if (!rep->motion.adopted.empty())
   {

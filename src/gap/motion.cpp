@@ -68,13 +68,22 @@ MotionSummary summariseMotion(const Recording& r)
   const Eigen::Index n = r.data.rows();
   if (n < 2)
     return m;
-  // Standing tilt: the mean specific force in the sensor frame is gravity's up direction.
+  // Standing tilt: the mean of up in the sensor frame, as the reported orientation gives it;
+  // without one, the mean specific force (which an accelerometer bias also moves: with an
+  // orientation, that difference is left to the sensor effects).
   const Eigen::Vector3d mean_force = r.data.leftCols(3).colwise().mean().transpose();
-  m.roll = std::atan2(mean_force.y(), mean_force.z());
-  m.pitch = std::atan2(-mean_force.x(), std::hypot(mean_force.y(), mean_force.z()));
+  const bool oriented = r.has_orientation && r.orientation.size() == static_cast<std::size_t>(n);
+  Eigen::Vector3d up_in_sensor = mean_force;
+  if (oriented)
+  {
+    up_in_sensor.setZero();
+    for (Eigen::Index i = 0; i < n; ++i)
+      up_in_sensor += r.orientation[i].conjugate() * Eigen::Vector3d::UnitZ();
+  }
+  m.roll = std::atan2(up_in_sensor.y(), up_in_sensor.z());
+  m.pitch = std::atan2(-up_in_sensor.x(), std::hypot(up_in_sensor.y(), up_in_sensor.z()));
   // Vertical specific force: through the reported orientation when there is one, else along
   // the mean force; gravity (its mean) taken off.
-  const bool oriented = r.has_orientation && r.orientation.size() == static_cast<std::size_t>(n);
   const Eigen::Vector3d up = mean_force.normalized();
   Eigen::VectorXd vertical(n);
   Eigen::MatrixXd world(oriented ? n : 0, 2);  // horizontal specific force, ENU
@@ -261,7 +270,8 @@ MotionFit fitMotion(const Recording& real, const sim::Scenario& scenario, const 
 }
 
 std::optional<MotionCandidate> fitWaveResponses(const Recording& real, const sim::Scenario& scenario,
-                                                const std::vector<Recording>& runs, std::vector<std::string>* findings)
+                                                const std::vector<Recording>& runs, std::vector<std::string>* findings,
+                                                bool rotations_only)
 {
   if (!hasSea(scenario) || runs.empty())
     return std::nullopt;
@@ -274,7 +284,7 @@ std::optional<MotionCandidate> fitWaveResponses(const Recording& real, const sim
   std::string changed;
   for (int d = 0; d < 6; ++d)
   {
-    if (d == 2)
+    if (d == 2 || (rotations_only && d < 3))
       continue;  // the heave is the sea state's
     const Spread sim = spreadOf(sims, [d](const MotionSummary& m) { return m.wave_rms[d]; });
     const double ratio = r.wave_rms[d] / std::max(sim.mean, 1e-12);

@@ -162,6 +162,19 @@ std::vector<WaveComponent> drawWaveComponents(const Sea& sea, double gravity, st
       out.push_back(c);
     }
   }
+  if (sea.response_coherence < 1.0)
+  {
+    // A stream of its own: the components are those of a coherent sea with the same seed.
+    Rng lag_rng(deriveSeed(seed, "response_lag", 0));
+    for (WaveComponent& c : out)
+    {
+      for (int j = 0; j < 6; ++j)
+      {
+        const double u = lag_rng.uniform(-M_PI, M_PI);
+        c.lag[j] = j == kHeave ? 0.0 : (1.0 - sea.response_coherence) * u;
+      }
+    }
+  }
   return out;
 }
 
@@ -212,8 +225,10 @@ ShipMotion::Dofs ShipMotion::seaDofsDirect(double elapsed, const SlowState& slow
     const std::array<Gain, 6> g = gains(motion_.sea, c.wavenumber, c.direction - slow.heading);
     for (int j = 0; j < 6; ++j)
     {
-      const double f0 = g[j].cosine ? co : s;
-      const double f1 = g[j].cosine ? -s : co;
+      const double sj = c.lag[j] == 0.0 ? s : std::sin(th + c.lag[j]);
+      const double cj = c.lag[j] == 0.0 ? co : std::cos(th + c.lag[j]);
+      const double f0 = g[j].cosine ? cj : sj;
+      const double f1 = g[j].cosine ? -sj : cj;
       const double f2 = -f0;
       d[3 * j] += c.amplitude * g[j].g0 * f0;
       d[3 * j + 1] += c.amplitude * (g[j].g1 * mu_dot * f0 + g[j].g0 * f1 * th_dot);
@@ -271,6 +286,12 @@ void ShipMotion::fillSeaBlock(std::int64_t k0)
     sin_.col(j).array() = sin_.col(j - 1).array() * step_cos_ + cos_.col(j - 1).array() * step_sin_;
     cos_.col(j).array() = cos_.col(j - 1).array() * step_cos_ - sin_.col(j - 1).array() * step_sin_;
   }
+  if (lagged_)
+  {
+    block_.noalias() = sin_coeff_ * sin_;
+    block_.noalias() += cos_coeff_ * cos_;
+    return;
+  }
   sin_rows_.noalias() = sin_coeff_ * sin_;
   cos_rows_.noalias() = cos_coeff_ * cos_;
   int rs = 0;
@@ -287,6 +308,12 @@ void ShipMotion::fillSeaBlock(std::int64_t k0)
 void ShipMotion::buildSeaCoefficients(const SlowState& slow)
 {
   const Eigen::Index m = static_cast<Eigen::Index>(components_.size());
+  lagged_ = motion_.sea.response_coherence < 1.0;
+  if (lagged_)
+  {
+    buildLaggedSeaCoefficients(slow);
+    return;
+  }
   sin_coeff_ = Eigen::MatrixXd::Zero(11, m);
   cos_coeff_ = Eigen::MatrixXd::Zero(7, m);
   step_cos_.resize(m);
@@ -315,6 +342,40 @@ void ShipMotion::buildSeaCoefficients(const SlowState& slow)
         sin_coeff_(rs++, i) = a;
         cos_coeff_(rc++, i) = a * we;
         sin_coeff_(rs++, i) = -a * we * we;
+      }
+    }
+  }
+}
+
+void ShipMotion::buildLaggedSeaCoefficients(const SlowState& slow)
+{
+  // Row 3 j + n (Dof j, derivative n) of a component: a g0 F_n(theta + lag_j) with F_0 = sin or
+  // cos, F_1 = w_e F_0', F_2 = -w_e^2 F_0. F(x) = A sin x + B cos x at x = theta + lag is
+  // (A cos lag - B sin lag) sin theta + (A sin lag + B cos lag) cos theta.
+  const Eigen::Index m = static_cast<Eigen::Index>(components_.size());
+  sin_coeff_ = Eigen::MatrixXd::Zero(18, m);
+  cos_coeff_ = Eigen::MatrixXd::Zero(18, m);
+  step_cos_.resize(m);
+  step_sin_.resize(m);
+  for (Eigen::Index i = 0; i < m; ++i)
+  {
+    const WaveComponent& c = components_[i];
+    const Vector3 dir(std::cos(c.direction), std::sin(c.direction), 0.0);
+    const double we = c.omega - c.wavenumber * dir.dot(slow.velocity);
+    step_cos_[i] = std::cos(we * dt_);
+    step_sin_[i] = std::sin(we * dt_);
+    const std::array<Gain, 6> g = gains(motion_.sea, c.wavenumber, c.direction - slow.heading);
+    for (int j = 0; j < 6; ++j)
+    {
+      const double a = c.amplitude * g[j].g0;
+      const double cl = std::cos(c.lag[j]), sl = std::sin(c.lag[j]);
+      const double A0 = g[j].cosine ? 0.0 : 1.0, B0 = g[j].cosine ? 1.0 : 0.0;
+      const double A[3] = { A0, -we * B0, -we * we * A0 };
+      const double B[3] = { B0, we * A0, -we * we * B0 };
+      for (int n = 0; n < 3; ++n)
+      {
+        sin_coeff_(3 * j + n, i) = a * (A[n] * cl - B[n] * sl);
+        cos_coeff_(3 * j + n, i) = a * (A[n] * sl + B[n] * cl);
       }
     }
   }

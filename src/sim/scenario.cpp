@@ -218,6 +218,7 @@ void parseSea(Mapping& motion, Sea* out)
   }
   out->components = static_cast<int>(components);
   m.number("length", &out->length);
+  m.number("response_coherence", &out->response_coherence);
   if (m.has("response"))
   {
     Mapping r(m.get("response"), m.path("response"));
@@ -440,6 +441,7 @@ void validateScenario(const Scenario& s)
     }
     check("motion.sea.components", m.sea.components, 1, 5000, "");
     check("motion.sea.length", m.sea.length, 0.0, 500.0, "m");
+    check("motion.sea.response_coherence", m.sea.response_coherence, 0.0, 1.0, "-");
     for (int j = 0; j < 6; ++j)
     {
       check("motion.sea.response." + dofNames()[j], m.sea.response[j], 0.0, 10.0, "-");
@@ -561,6 +563,7 @@ std::string toYaml(const Scenario& s)
       out << YAML::Key << dofNames()[j] << YAML::Value << shortest(m.sea.response[j]);
     }
     out << YAML::EndMap;
+    out << YAML::Key << "response_coherence" << YAML::Value << shortest(m.sea.response_coherence);
     out << YAML::Key << "systems" << YAML::Value << YAML::BeginSeq;
     for (const WaveSystem& w : m.sea.systems)
     {

@@ -478,6 +478,7 @@ struct CaseResult
   std::string why;          ///< why not detectable
   double effect_gap = 0.0;  ///< gap of the effect's own shift (Detectability)
   double effect_max_z = 0.0;
+  bool motion_differs = false;  ///< the diagnosis's motion stage found the motion different
 };
 
 /// Speed: a sea recording of `hours` at 100 Hz with a withheld vibration, diagnosed against the
@@ -616,6 +617,7 @@ void takeReport(const gap::Report& rep, CaseResult* cr)
 {
   cr->verdict = rep.verdict_effect;
   cr->confidence = rep.confidence;
+  cr->motion_differs = rep.motion.differs;
   cr->gap_before = rep.gap_before;
   cr->null_gap = rep.null_gap_held;
   cr->seconds = rep.seconds;
@@ -735,9 +737,18 @@ bool named(const CaseResult& c)
   return false;
 }
 
+/// Per motion: detectable cases named and all detectable, the median shrink of those named, the
+/// cases without a withheld effect and how many of them the motion stage found different.
+struct MotionScore
+{
+  int det_ok = 0, det = 0, nulls = 0, null_differs = 0;
+  std::vector<double> shrinks;
+};
+
 struct Scores
 {
   int det = 0, det_ok = 0, nulls = 0, null_confident = 0;
+  std::map<std::string, MotionScore> per_motion;
   std::vector<double> shrinks;                                  ///< sorted, of the cases named correctly
   std::map<std::string, std::pair<int, int>> per_effect;        ///< named, detectable cases
   std::map<std::string, std::map<std::string, int>> confusion;  ///< withheld effect -> verdict -> count
@@ -751,9 +762,12 @@ Scores score(const std::vector<CaseResult>& results)
   Scores s;
   for (const auto& c : results)
   {
+    MotionScore& m = s.per_motion[c.motion];
     if (c.effect == "none")
     {
       ++s.nulls;
+      ++m.nulls;
+      m.null_differs += c.motion_differs ? 1 : 0;
       s.null_confident += (c.confidence >= 0.5) ? 1 : 0;
       s.confusion["none"][c.verdict] += 1;
       continue;
@@ -768,9 +782,12 @@ Scores score(const std::vector<CaseResult>& results)
     s.det_ok += ok ? 1 : 0;
     s.per_effect[c.effect].first += ok ? 1 : 0;
     s.per_effect[c.effect].second += 1;
+    ++m.det;
+    m.det_ok += ok ? 1 : 0;
     if (ok)
     {
       s.shrinks.push_back(c.shrink);
+      m.shrinks.push_back(c.shrink);
     }
   }
   std::sort(s.shrinks.begin(), s.shrinks.end());
@@ -847,7 +864,17 @@ std::string casesMarkdown(const std::vector<CaseResult>& results, const Scores& 
     const auto pe = s.per_effect.count(e) > 0 ? s.per_effect.at(e) : std::pair<int, int>(0, 0);
     md << "| " << e << " | " << pe.first << " / " << pe.second << " | " << verdictCounts(s, e) << " |\n";
   }
-  md << "| none | - | " << verdictCounts(s, "none") << " |\n\nNot detectable (effect's own shift: gap, largest |z|):";
+  md << "| none | - | " << verdictCounts(s, "none") << " |\n\n";
+  md << "| motion | named / detectable | median shrink (named) | without an effect: motion found different |\n"
+        "|---|---|---|---|\n";
+  for (auto [motion, m] : s.per_motion)
+  {
+    std::sort(m.shrinks.begin(), m.shrinks.end());
+    const double median = m.shrinks.empty() ? 0.0 : m.shrinks[m.shrinks.size() / 2];
+    md << "| " << motion << " | " << m.det_ok << " / " << m.det << " | " << static_cast<int>(std::lround(100 * median))
+       << " % | " << m.null_differs << " of " << m.nulls << " |\n";
+  }
+  md << "\nNot detectable (effect's own shift: gap, largest |z|):";
   char buf[512];
   for (const auto& c : results)
   {
@@ -896,7 +923,8 @@ std::string resultsJson(const std::vector<CaseResult>& results, const Scores& s)
                       { "null_gap", gap::sixDigits(c.null_gap) },
                       { "detectable", c.detectable },
                       { "effect_gap", gap::sixDigits(c.effect_gap) },
-                      { "effect_max_z", gap::sixDigits(c.effect_max_z) } });
+                      { "effect_max_z", gap::sixDigits(c.effect_max_z) },
+                      { "motion_differs", c.motion_differs } });
   }
   const nlohmann::ordered_json j = { { "accuracy", gap::sixDigits(s.accuracy) },
                                      { "median_shrink", gap::sixDigits(s.median_shrink) },

@@ -77,3 +77,25 @@ TEST(GapMotion, TheScenariosOwnMotionDoesNotDiffer)
   EXPECT_TRUE(rep.motion.adopted.empty());
   EXPECT_EQ(rep.motion.gap_before, rep.motion.gap_after);
 }
+
+TEST(GapMotion, AHullsOwnResponsesAreFittedBeforeSensorEffects)
+{
+  // The recording: the scenario's sea on the bow quarter and a trim, but a hull that rolls three
+  // times as much and whose surge, sway, roll, pitch and yaw keep no phase with the waves.
+  sim::Scenario scenario = mooredSea(1.5, 8.0);
+  scenario.motion.sea.systems[0].direction = 0.8;
+  sim::Scenario recorded = scenario;
+  recorded.motion.pitch = 0.02;
+  recorded.motion.sea.response[sim::kRoll] *= 3.0;
+  recorded.motion.sea.response_coherence = 0.0;
+  const gap::Report rep = gap::diagnose(gap::simulateRecording(recorded, 14), scenario, gap::DiagnoseOptions());
+  const gap::MotionFit& m = rep.motion;
+  ASSERT_TRUE(m.differs) << gap::reportSummary(rep);
+  EXPECT_NE(m.adopted.find("wave responses"), std::string::npos) << gap::reportSummary(rep);
+  EXPECT_NE(m.adopted.find("response coherence"), std::string::npos) << gap::reportSummary(rep);
+  EXPECT_LT(m.gap_after, 0.3 * m.gap_before) << gap::reportSummary(rep);
+  EXPECT_NEAR(m.fitted.motion.sea.response[sim::kRoll], 2.4, 0.6) << gap::reportSummary(rep);
+  EXPECT_LT(m.fitted.motion.sea.response_coherence, 1.0);
+  // No sensor effect is made of the motion.
+  EXPECT_LT(rep.confidence, 0.5) << gap::reportSummary(rep);
+}

@@ -323,3 +323,42 @@ TEST(Motion, RandomAccessMatchesSequentialEvaluation)
     ASSERT_LT(t.attitude.angularDistance(forward[k].attitude), 1e-9) << k;
   }
 }
+
+TEST(Motion, IncoherentResponsesAreConsistentAndDecorrelated)
+{
+  // Response lags of their own: the truth stays consistent (fast path and turns), the heave is
+  // the coherent sea's, and the roll (k a sin) no longer follows the sway's acceleration
+  // (-w^2 a sin, the same frequency weighting) as the wave slope makes it.
+  sim::Scenario coherent = seaScenario(200.0, 600.0);
+  coherent.motion.speed = 0.0;
+  coherent.motion.sea.systems.resize(1);
+  coherent.motion.sea.systems[0].direction = M_PI / 2;  // beam seas: sway and roll both large
+  sim::Scenario lagged = coherent;
+  lagged.motion.sea.response_coherence = 0.0;
+  sim::validateScenario(lagged);
+  const std::vector<sim::Truth> a = truths(coherent), b = truths(lagged);
+  expectConsistent(b, lagged.rate, 1e-3);
+  sim::Scenario route = routeScenario(100.0);
+  route.motion.sea.response_coherence = 0.3;
+  expectConsistent(truths(route), route.rate, 2e-3);
+  const auto correlation = [](const std::vector<sim::Truth>& x) {
+    double sxy = 0.0, sxx = 0.0, syy = 0.0;
+    for (const sim::Truth& t : x)
+    {
+      const double roll = std::remainder(t.attitude.toRotationMatrix().eulerAngles(2, 1, 0)[2], M_PI);
+      const double sway = t.wave_acceleration.y();
+      sxy += roll * sway;
+      sxx += roll * roll;
+      syy += sway * sway;
+    }
+    return sxy / std::sqrt(sxx * syy);
+  };
+  EXPECT_GT(std::abs(correlation(a)), 0.95);
+  EXPECT_LT(std::abs(correlation(b)), 0.3);
+  double heave_difference = 0.0;
+  for (std::size_t k = 0; k < a.size(); ++k)
+  {
+    heave_difference = std::max(heave_difference, std::abs(a[k].wave_position.z() - b[k].wave_position.z()));
+  }
+  EXPECT_LT(heave_difference, 1e-9);
+}

@@ -297,7 +297,7 @@ struct Candidate
 /// The motion of one recording, as the diagnosis compares it.
 struct MotionSummary
 {
-  double roll = 0.0;         ///< standing tilt from the mean specific force, sensor frame [rad]
+  double roll = 0.0;         ///< standing tilt: mean up as the orientation gives it, else the mean force [rad]
   double pitch = 0.0;        ///< [rad]
   double heading = NAN;      ///< mean heading from the reported orientation (NaN without) [rad]
   double wave_height = 0.0;  ///< 4 sqrt(m0) of the heave in the 2-25 s band [m]
@@ -346,9 +346,12 @@ MotionFit fitMotion(const Recording& real, const sim::Scenario& scenario, const 
 /// The scenario's sea responses (sim::Sea::response) of surge, sway, roll, pitch and yaw scaled
 /// by the recording's wave-band RMS of each over the runs' mean, where it is 15 % and three
 /// spreads off (at most 5); nullopt when none is, or the scenario has no sea. The runs are of
-/// `scenario` (after its sea state is fitted: the heave is left to it). Adds a finding.
+/// `scenario` (after its sea state is fitted: the heave is left to it). Adds a finding. With
+/// `rotations_only`, roll, pitch and yaw alone (the gyro's: a lever arm, a scale factor or a
+/// misalignment of the accelerometer changes surge and sway, not them).
 std::optional<MotionCandidate> fitWaveResponses(const Recording& real, const sim::Scenario& scenario,
-                                                const std::vector<Recording>& runs, std::vector<std::string>* findings);
+                                                const std::vector<Recording>& runs, std::vector<std::string>* findings,
+                                                bool rotations_only = false);
 
 /// Directly visible effect (stamps, lattice, clipping, gaps).
 struct DirectDetection

@@ -66,6 +66,8 @@ struct WaveComponent
   double wavenumber = 0.0;  ///< deep water, omega^2 / g [rad/m]
   double direction = 0.0;   ///< propagation direction, ENU yaw [rad]
   double phase = 0.0;       ///< [rad]
+  /// Extra phase of each Dof's response [rad] (Sea::response_coherence; heave's is 0).
+  std::array<double, 6> lag{};
 };
 
 /// JONSWAP spectral density S(omega) [m^2 s / rad] (gamma = 1: Pierson-Moskowitz).
@@ -114,6 +116,7 @@ private:
   Dofs seaDofsDirect(double elapsed, const SlowState& slow) const;
   void fillSeaBlock(std::int64_t k0);
   void buildSeaCoefficients(const SlowState& slow);
+  void buildLaggedSeaCoefficients(const SlowState& slow);
 
   Motion motion_;
   double dt_;
@@ -123,8 +126,10 @@ private:
   Eigen::MatrixXd block_;  ///< 18 x n sea DOFs of the cached block
   std::int64_t block_start_ = -1;
   // Steady-segment fast path: per-component coefficients of the rows that follow sin(theta)
-  // (11) and cos(theta) (7), phasor steps, and the block's phasors and products.
+  // (11) and cos(theta) (7), phasor steps, and the block's phasors and products. With response
+  // lags every row has both parts: 18 rows each (lagged_).
   std::size_t coeff_segment_ = static_cast<std::size_t>(-1);
+  bool lagged_ = false;
   Eigen::MatrixXd sin_coeff_;
   Eigen::MatrixXd cos_coeff_;
   Eigen::ArrayXd step_cos_;

@@ -53,6 +53,11 @@ struct Sea
   /// Response amplitude factors [-] per Dof: surge/sway/heave follow the water particle motion
   /// times the factor, roll/pitch/yaw follow the wave slope times the factor.
   std::array<double, 6> response{ { 0.5, 0.5, 0.9, 0.8, 0.6, 0.1 } };
+  /// How closely surge, sway, roll, pitch and yaw keep the phase of the wave at the ship [-]:
+  /// 1 = exactly (particle motion and slope); below 1 each of them lags every component by
+  /// (1 - coherence) x U(-pi, pi) of its own, as a hull's response phases do (they vary with
+  /// frequency and are not the local slope's). The heave keeps the wave's phase.
+  double response_coherence = 1.0;
   /// Ship length [m]: waves shorter than the ship move it less, every component's response is
   /// scaled by 1 / (1 + (length / wavelength)^2). 0 = the ship follows the water at a point.
   double length = 0.0;
