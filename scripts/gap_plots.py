@@ -1,8 +1,9 @@
 #!/usr/bin/env python3
 """Plots of a diagnose_gap output folder: spectra and Allan curves (real vs sim vs sim+effect,
 withheld part), a gap heat map (axis x band, z of the withheld part before the verdict), drift
-curves (block means of the whole recording against the ensemble's range) and, with a truth,
-the residual real minus the ideal IMU of the truth against the simulated runs' own (truth.png).
+curves (block means of the whole recording against the ensemble's range), the heave spectra of
+the motion stage (motion.png, when the motion differs) and, with a truth, the residual real
+minus the ideal IMU of the truth against the simulated runs' own (truth.png).
 
     /usr/bin/python3 scripts/gap_plots.py --dir OUT [--title TEXT]
 """
@@ -116,6 +117,21 @@ def main():
     fig.tight_layout()
     save(fig, os.path.join(d, "allan.png"))
     plt.close(fig)
+
+    if os.path.exists(os.path.join(d, "motion.csv")):
+        m = curves([dict(r, channel="heave") for r in read(os.path.join(d, "motion.csv"))], "f")["heave"]
+        fig, ax = plt.subplots(figsize=(7, 3.6))
+        ax.semilogy(m["f"], m["real"], color="k", lw=1.0, label="recording")
+        ax.semilogy(m["f"], m["given"], color="tab:blue", lw=0.9, label="scenario as given (ensemble mean)")
+        ax.semilogy(m["f"], m["fitted"], color="tab:red", ls="--", lw=0.9, label="motion fitted (ensemble mean)")
+        ax.set_xlabel("Hz", fontsize=8)
+        ax.set_ylabel("heave [m^2/Hz]", fontsize=8)
+        ax.tick_params(labelsize=7)
+        ax.set_title("Heave spectrum, the motion stage's wave band: " + a.title, fontsize=8)
+        ax.legend(fontsize=7)
+        fig.tight_layout()
+        save(fig, os.path.join(d, "motion.png"))
+        plt.close(fig)
 
     block_plot(d, "drift", "Block means (drift), whole recording: " + a.title)
     if os.path.exists(os.path.join(d, "truth.csv")):

@@ -328,6 +328,7 @@ void motionStage(DiagnoseContext* context, BaseEnsemble* base, Report* rep)
     trials("response coherence", kCoherenceTrials, [](double v, sim::Sea* sea) { sea->response_coherence = v; });
     responses();
   }
+  rep->motion_csv = motionCsv(rep->motion, best_runs);
   if (!rep->motion.adopted.empty())
   {
     context->scenario = rep->motion.fitted;

@@ -55,6 +55,16 @@ std::string format(const char* pattern, double a, double b)
   return text;
 }
 
+/// The mean of the runs' heave spectra (bin by bin; the runs share a length and a rate).
+std::vector<double> meanHeaveDensity(const std::vector<MotionSummary>& runs)
+{
+  std::vector<double> mean(runs.empty() ? 0 : runs.front().heave_density.size(), 0.0);
+  for (const MotionSummary& m : runs)
+    for (std::size_t k = 0; k < mean.size() && k < m.heave_density.size(); ++k)
+      mean[k] += m.heave_density[k] / runs.size();
+  return mean;
+}
+
 bool hasSea(const sim::Scenario& s)
 {
   return (s.motion.type == sim::MotionType::kSea || s.motion.type == sim::MotionType::kRoute) &&
@@ -146,6 +156,8 @@ MotionSummary summariseMotion(const Recording& r)
     if (f < kWaveBandLow || f > kWaveBandHigh)
       continue;
     const double heave = psd.power[k] / std::pow(2.0 * M_PI * f, 4);
+    m.heave_frequency.push_back(f);
+    m.heave_density.push_back(heave);
     m0 += heave * psd.df;
     s4 += std::pow(heave, 4);
     f_s4 += f * std::pow(heave, 4);
@@ -174,6 +186,8 @@ MotionFit fitMotion(const Recording& real, const sim::Scenario& scenario, const 
   fit.scenario.pitch = pitch.mean;
   fit.scenario.wave_height = height.mean;
   fit.scenario.peak_period = period.mean;
+  fit.scenario.heave_frequency = sims.front().heave_frequency;
+  fit.scenario.heave_density = meanHeaveDensity(sims);
   const auto beyond = [](double real_value, const Spread& s, double tolerance) {
     return std::abs(real_value - s.mean) > std::max(tolerance, 3.0 * s.sd);
   };
@@ -300,6 +314,25 @@ std::optional<MotionCandidate> fitWaveResponses(const Recording& real, const sim
     return std::nullopt;
   findings->push_back("wave responses (wave-band RMS per degree of freedom against the ensemble's): " + changed);
   return candidate;
+}
+
+std::string motionCsv(const MotionFit& fit, const std::vector<Recording>& fitted_runs)
+{
+  std::vector<MotionSummary> fitted;
+  for (const Recording& run : fitted_runs)
+    fitted.push_back(summariseMotion(run));
+  const std::vector<double> fitted_density = meanHeaveDensity(fitted);
+  std::string csv = "f,real,given,fitted\n";
+  const std::vector<double>& f = fit.real.heave_frequency;
+  for (std::size_t k = 0; k < f.size(); ++k)
+  {
+    const auto at = [k](const std::vector<double>& v) { return k < v.size() ? v[k] : NAN; };
+    char row[160];
+    std::snprintf(row, sizeof row, "%.6g,%.6g,%.6g,%.6g\n", f[k], fit.real.heave_density[k],
+                  at(fit.scenario.heave_density), at(fitted_density));
+    csv += row;
+  }
+  return csv;
 }
 
 }  // namespace periodic_bias_compensation::gap

@@ -70,7 +70,8 @@ using periodic_bias_compensation::UsageError;
 
 /// The files diagnose_gap writes in --out (the plots aside).
 const char* const kReportFiles[] = { "report.json", "fitted_scenario.yaml", "psd.csv",   "allan.csv",
-                                     "drift.csv",   "features.csv",         "truth.csv", "report.md" };
+                                     "drift.csv",   "features.csv",         "truth.csv", "motion.csv",
+                                     "report.md" };
 
 struct Options
 {
@@ -310,6 +311,8 @@ std::string reportMarkdown(const gap::Report& rep, const Options& o, bool plots)
       m.findings.empty() ? "" : "\n", m.real.roll, m.real.pitch, m.real.wave_height, m.real.peak_period,
       m.scenario.roll, m.scenario.pitch, m.scenario.wave_height, m.scenario.peak_period, m.gap_before, m.gap_after);
   md << buf;
+  if (plots && !rep.motion_csv.empty())
+    md << "![heave spectra: recording, scenario as given, fitted](motion.png)\n\n";
   md << "## 1. Where (whole recording)\n\n";
   std::snprintf(
       buf, sizeof(buf),
@@ -587,6 +590,10 @@ void writeReport(const gap::Report& rep, const Stepwise& s, const Options& o)
   if (rep.has_truth)
   {
     write("truth.csv", rep.truth_csv);
+  }
+  if (!rep.motion_csv.empty())
+  {
+    write("motion.csv", rep.motion_csv);
   }
   const bool plots = o.plots && makePlots(rep, o);
   std::string md = reportMarkdown(rep, o, plots);

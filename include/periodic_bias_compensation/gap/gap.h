@@ -307,6 +307,8 @@ struct MotionSummary
   /// orientation; without one the sensor's x and y) [m/s^2], the vertical one [m/s^2], the
   /// gyro's x, y, z [rad/s].
   std::array<double, 6> wave_rms{};
+  std::vector<double> heave_frequency;  ///< bins of the heave spectrum in that band [Hz]
+  std::vector<double> heave_density;    ///< the heave spectrum there [m^2/Hz]
 };
 
 /// Heave from the vertical specific force (through the reported orientation when there is one,
@@ -326,7 +328,7 @@ struct MotionFit
 {
   bool differs = false;                     ///< a tilt, heading or sea state beyond the ensemble's spread
   MotionSummary real;                       ///< the recording's
-  MotionSummary scenario;                   ///< the ensemble's mean
+  MotionSummary scenario;                   ///< the ensemble's mean (the heave spectrum bin by bin)
   std::vector<std::string> findings;        ///< one line per difference, in words
   std::vector<MotionCandidate> candidates;  ///< fits to try, the whole one first
   std::string adopted;                      ///< the candidate that brought the withheld part closest ("" none)
@@ -352,6 +354,11 @@ MotionFit fitMotion(const Recording& real, const sim::Scenario& scenario, const 
 std::optional<MotionCandidate> fitWaveResponses(const Recording& real, const sim::Scenario& scenario,
                                                 const std::vector<Recording>& runs, std::vector<std::string>* findings,
                                                 bool rotations_only = false);
+
+/// The heave spectra of the motion stage as CSV, "f,real,given,fitted" [Hz, m^2/Hz]: the
+/// recording's, the mean of the scenario's runs as given, and the mean of `fitted_runs` (the
+/// adopted fit's).
+std::string motionCsv(const MotionFit& fit, const std::vector<Recording>& fitted_runs);
 
 /// Directly visible effect (stamps, lattice, clipping, gaps).
 struct DirectDetection
@@ -408,6 +415,7 @@ struct Report
   std::vector<Departure> truth_where;  ///< stage "truth", quantity truth_mean / truth_std
   std::vector<Departure> stage_where;  ///< stage "compensator" (its pipeline on real vs ensemble)
   std::string truth_csv;               ///< channel,t,real,sim_lo,sim_med,sim_hi (block means of the residual)
+  std::string motion_csv;  ///< f,real,given,fitted: heave spectra (motionCsv; empty when the motion does not differ)
 };
 
 /// Full diagnosis of a real recording against a scenario.
