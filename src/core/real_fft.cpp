@@ -1,17 +1,9 @@
 #include "real_fft.h"
 
+#include "periodic_bias_compensation/common/fftw_planner.h"
+
 namespace periodic_bias_compensation
 {
-namespace
-{
-// FFTW's planner is not thread-safe; execution of an existing plan is.
-std::mutex& plannerMutex()
-{
-  static std::mutex mutex;
-  return mutex;
-}
-}  // namespace
-
 int fastFftSize(int n)
 {
   for (int m = n;; ++m)
@@ -29,14 +21,14 @@ RealFft::RealFft(int n) : n_(n)
 {
   in = fftw_alloc_real(n);
   out = fftw_alloc_complex(n / 2 + 1);
-  std::lock_guard<std::mutex> lock(plannerMutex());
+  std::lock_guard<std::mutex> lock(fftwPlannerMutex());
   plan_ = fftw_plan_dft_r2c_1d(n, in, out, FFTW_ESTIMATE);
   inverse_plan_ = fftw_plan_dft_c2r_1d(n, out, in, FFTW_ESTIMATE);
 }
 
 RealFft::~RealFft()
 {
-  std::lock_guard<std::mutex> lock(plannerMutex());
+  std::lock_guard<std::mutex> lock(fftwPlannerMutex());
   fftw_destroy_plan(plan_);
   fftw_destroy_plan(inverse_plan_);
   fftw_free(in);

@@ -336,15 +336,12 @@ void motionStage(DiagnoseContext* context, BaseEnsemble* base, Report* rep)
   }
 }
 
-/// The compensator's pipeline stages on the real recording against the same on every run. One
-/// run at a time: the core plans FFTW transforms, and FFTW planning is not thread-safe.
+/// The compensator's pipeline stages on the real recording against the same on every run, the
+/// runs in threads (the core and the spectra plan FFTW under one lock, fftw_planner.h).
 void compensatorStage(const DiagnoseContext& context, const BaseEnsemble& base, Report* rep)
 {
   std::vector<std::vector<double>> stage_members(context.runs);
-  for (int i = 0; i < context.runs; ++i)
-  {
-    stage_members[i] = stageFeatures(base.runs[i], 4);
-  }
+  parallelFor(context.runs, context.opt.threads, [&](int i) { stage_members[i] = stageFeatures(base.runs[i], 4); });
   const FeatureLayout layout = stageLayout(rep->duration, 4);
   rep->stage_where = rankDepartures(stageFeatures(context.real, 4), ensembleStats(stage_members, layout), layout);
 }

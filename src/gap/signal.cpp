@@ -13,6 +13,7 @@
 #include <thread>
 #include <tuple>
 
+#include "periodic_bias_compensation/common/fftw_planner.h"
 #include "periodic_bias_compensation/common/numeric.h"
 #include "periodic_bias_compensation/gap/gap.h"
 #include "periodic_bias_compensation/sim/simulator.h"
@@ -21,12 +22,6 @@ namespace periodic_bias_compensation::gap
 {
 namespace
 {
-std::mutex& fftwMutex()
-{
-  static std::mutex m;
-  return m;
-}
-
 /// FFTW real-to-complex plan for one length (planning is not thread-safe: under a mutex).
 class RealFft
 {
@@ -35,12 +30,12 @@ public:
   {
     in_ = fftw_alloc_real(n);
     out_ = fftw_alloc_complex(n / 2 + 1);
-    std::lock_guard<std::mutex> lock(fftwMutex());
+    std::lock_guard<std::mutex> lock(fftwPlannerMutex());
     plan_ = fftw_plan_dft_r2c_1d(n, in_, out_, FFTW_ESTIMATE);
   }
   ~RealFft()
   {
-    std::lock_guard<std::mutex> lock(fftwMutex());
+    std::lock_guard<std::mutex> lock(fftwPlannerMutex());
     fftw_destroy_plan(plan_);
     fftw_free(in_);
     fftw_free(out_);
@@ -545,6 +540,22 @@ StampLine fitStampLine(const std::vector<double>& stamp, double rate)
     }
     line.offset = n > 0 ? stamp[0] : 0.0;
     line.period = rate > 0.0 ? 1.0 / rate : 0.0;
+    return line;
+  }
+  // Stamps on an exact grid (a simulated run without stamp effects): every index is the next.
+  bool regular = true;
+  for (std::size_t i = 1; i < n && regular; ++i)
+  {
+    regular = std::abs((stamp[i] - stamp[i - 1]) * rate - 1.0) < 1e-6;
+  }
+  if (regular)
+  {
+    line.index.resize(n);
+    for (std::size_t i = 0; i < n; ++i)
+    {
+      line.index[i] = static_cast<double>(i);
+    }
+    std::tie(line.offset, line.period) = trimmedLine(stamp, line.index);
     return line;
   }
   double f = refineRate(stamp, rate, 256);
