@@ -359,11 +359,12 @@ struct Line
   double width_bins = 0.0;
 };
 
-Line strongestLine(const Psd& real, const Vec& sim, double min_ratio)
+Line strongestLine(const Psd& real, const Vec& sim, double min_ratio, double min_freq = 0.0)
 {
   Line best;
   const std::size_t nb = real.power.size();
-  for (std::size_t k = 2; k + 1 < nb; ++k)
+  const std::size_t first = std::max<std::size_t>(2, static_cast<std::size_t>(std::ceil(min_freq / real.df)));
+  for (std::size_t k = first; k + 1 < nb; ++k)
   {
     const double ratio = real.power[k] / std::max(sim[k], 1e-300);
     const double excess = real.power[k] - sim[k];
@@ -536,10 +537,16 @@ struct AllanExcess
 };
 
 /// The strongest excess spectral line per channel and the ensemble's mean fine PSD.
+/// Vibration lines are searched from here up: an engine's or a propeller's; a slower line is a
+/// periodic bias (the naming rule of docs/gap.md), and a sea whose motion the scenario matches
+/// only roughly leaves excess lines in its wave band that are not the sensor's [Hz].
+constexpr double kVibrationMinFrequency = 1.0;
+
 struct LineSearch
 {
-  std::vector<Line> lines;    ///< per channel (power 0: none)
-  std::vector<Vec> mean_psd;  ///< per channel, ensemble mean of the fine PSD
+  std::vector<Line> lines;       ///< per channel (power 0: none)
+  std::vector<Line> fast_lines;  ///< per channel, from kVibrationMinFrequency up
+  std::vector<Vec> mean_psd;     ///< per channel, ensemble mean of the fine PSD
 };
 
 /// What the fitters share, built once: the statistics of the recording and of every run.
@@ -673,6 +680,7 @@ LineSearch lineSearch(const FitContext& context)
 {
   LineSearch out;
   out.lines.resize(kChannels);
+  out.fast_lines.resize(kChannels);
   out.mean_psd.resize(kChannels);
   for (int c = 0; c < kChannels; ++c)
   {
@@ -686,11 +694,12 @@ LineSearch lineSearch(const FitContext& context)
         max_psd[k] = std::max(max_psd[k], s.psd_fine[c].power[k]);
       }
     }
-    out.lines[c] = strongestLine(context.real_stats.psd_fine[c], max_psd, 6.0);
-    if (out.lines[c].power > 0)
-    {
-      out.lines[c] = strongestLine(context.real_stats.psd_fine[c], out.mean_psd[c], 6.0);
-    }
+    const auto search = [&](double min_freq) {
+      const Line line = strongestLine(context.real_stats.psd_fine[c], max_psd, 6.0, min_freq);
+      return line.power > 0 ? strongestLine(context.real_stats.psd_fine[c], out.mean_psd[c], 6.0, min_freq) : line;
+    };
+    out.lines[c] = search(0.0);
+    out.fast_lines[c] = search(kVibrationMinFrequency);
   }
   return out;
 }
@@ -1223,7 +1232,7 @@ Vec lineAmplitudes(const FitContext& context, double f, std::size_t k0, double w
 /// vibration: the line with the largest excess ratio, on every axis where it shows.
 std::optional<Fit> fitVibration(const FitContext& context)
 {
-  const std::vector<Line>& lines = context.line_search.lines;
+  const std::vector<Line>& lines = context.line_search.fast_lines;
   int best = -1;
   for (int c = 0; c < kChannels; ++c)
   {
@@ -1256,7 +1265,7 @@ std::optional<Fit> fitVibration(const FitContext& context)
   e.params["phase"] = { phase };
   e.params["bandwidth"] = { bw };
   specs.push_back(e);
-  return Fit{ specs, "strongest excess line over all axes, amplitude per axis sqrt(2 P)" };
+  return Fit{ specs, "strongest excess line above 1 Hz over all axes, amplitude per axis sqrt(2 P)" };
 }
 
 /// thermal_drift: the slope of block means against temperature, real minus ensemble.
