@@ -307,15 +307,14 @@ void ShipMotion::fillSeaBlock(std::int64_t k0)
 
 void ShipMotion::buildSeaCoefficients(const SlowState& slow)
 {
+  // Coherent responses: each Dof's rows follow sin(theta) or cos(theta) alone (11 and 7 rows).
+  // With response lags every row 3 j + n (Dof j, derivative n) has both parts: a g0 F_n(theta +
+  // lag_j) with F_0 = sin or cos, F_1 = w_e F_0', F_2 = -w_e^2 F_0, and F(x) = A sin x + B cos x
+  // at x = theta + lag is (A cos lag - B sin lag) sin theta + (A sin lag + B cos lag) cos theta.
   const Eigen::Index m = static_cast<Eigen::Index>(components_.size());
   lagged_ = motion_.sea.response_coherence < 1.0;
-  if (lagged_)
-  {
-    buildLaggedSeaCoefficients(slow);
-    return;
-  }
-  sin_coeff_ = Eigen::MatrixXd::Zero(11, m);
-  cos_coeff_ = Eigen::MatrixXd::Zero(7, m);
+  sin_coeff_ = Eigen::MatrixXd::Zero(lagged_ ? 18 : 11, m);
+  cos_coeff_ = Eigen::MatrixXd::Zero(lagged_ ? 18 : 7, m);
   step_cos_.resize(m);
   step_sin_.resize(m);
   for (Eigen::Index i = 0; i < m; ++i)
@@ -331,7 +330,19 @@ void ShipMotion::buildSeaCoefficients(const SlowState& slow)
     for (int j = 0; j < 6; ++j)
     {
       const double a = c.amplitude * g[j].g0;
-      if (g[j].cosine)
+      if (lagged_)
+      {
+        const double cl = std::cos(c.lag[j]), sl = std::sin(c.lag[j]);
+        const double A0 = g[j].cosine ? 0.0 : 1.0, B0 = g[j].cosine ? 1.0 : 0.0;
+        const double A[3] = { A0, -we * B0, -we * we * A0 };
+        const double B[3] = { B0, we * A0, -we * we * B0 };
+        for (int n = 0; n < 3; ++n)
+        {
+          sin_coeff_(3 * j + n, i) = a * (A[n] * cl - B[n] * sl);
+          cos_coeff_(3 * j + n, i) = a * (A[n] * sl + B[n] * cl);
+        }
+      }
+      else if (g[j].cosine)
       {
         cos_coeff_(rc++, i) = a;
         sin_coeff_(rs++, i) = -a * we;
@@ -342,40 +353,6 @@ void ShipMotion::buildSeaCoefficients(const SlowState& slow)
         sin_coeff_(rs++, i) = a;
         cos_coeff_(rc++, i) = a * we;
         sin_coeff_(rs++, i) = -a * we * we;
-      }
-    }
-  }
-}
-
-void ShipMotion::buildLaggedSeaCoefficients(const SlowState& slow)
-{
-  // Row 3 j + n (Dof j, derivative n) of a component: a g0 F_n(theta + lag_j) with F_0 = sin or
-  // cos, F_1 = w_e F_0', F_2 = -w_e^2 F_0. F(x) = A sin x + B cos x at x = theta + lag is
-  // (A cos lag - B sin lag) sin theta + (A sin lag + B cos lag) cos theta.
-  const Eigen::Index m = static_cast<Eigen::Index>(components_.size());
-  sin_coeff_ = Eigen::MatrixXd::Zero(18, m);
-  cos_coeff_ = Eigen::MatrixXd::Zero(18, m);
-  step_cos_.resize(m);
-  step_sin_.resize(m);
-  for (Eigen::Index i = 0; i < m; ++i)
-  {
-    const WaveComponent& c = components_[i];
-    const Vector3 dir(std::cos(c.direction), std::sin(c.direction), 0.0);
-    const double we = c.omega - c.wavenumber * dir.dot(slow.velocity);
-    step_cos_[i] = std::cos(we * dt_);
-    step_sin_[i] = std::sin(we * dt_);
-    const std::array<Gain, 6> g = gains(motion_.sea, c.wavenumber, c.direction - slow.heading);
-    for (int j = 0; j < 6; ++j)
-    {
-      const double a = c.amplitude * g[j].g0;
-      const double cl = std::cos(c.lag[j]), sl = std::sin(c.lag[j]);
-      const double A0 = g[j].cosine ? 0.0 : 1.0, B0 = g[j].cosine ? 1.0 : 0.0;
-      const double A[3] = { A0, -we * B0, -we * we * A0 };
-      const double B[3] = { B0, we * A0, -we * we * B0 };
-      for (int n = 0; n < 3; ++n)
-      {
-        sin_coeff_(3 * j + n, i) = a * (A[n] * cl - B[n] * sl);
-        cos_coeff_(3 * j + n, i) = a * (A[n] * sl + B[n] * cl);
       }
     }
   }

@@ -116,7 +116,6 @@ private:
   Dofs seaDofsDirect(double elapsed, const SlowState& slow) const;
   void fillSeaBlock(std::int64_t k0);
   void buildSeaCoefficients(const SlowState& slow);
-  void buildLaggedSeaCoefficients(const SlowState& slow);
 
   Motion motion_;
   double dt_;
