@@ -1166,6 +1166,74 @@ std::optional<Fit> fitLeverArm(const FitContext& context)
 }
 
 /// periodic_bias: the strongest excess line per axis, frequency refined by least squares.
+/// A line too slow for the spectrum (under about 2.5 cycles in the fit part) on channel c: the
+/// sinusoid that best fits the block means of the recording minus the ensemble's mean, over 96
+/// periods on a log grid from 0.4 of the span to 4 spans, the best refined by a parabola through
+/// its neighbours' residuals. Kept when the block means depart by 4 times the ensemble's own
+/// spread of a block mean (RMS), and the sinusoid removes 80 % of their variance.
+bool slowLine(const FitContext& context, int c, double* amplitude, double* period, double* phase)
+{
+  const std::size_t block_length = context.samples / kAllanBlocks;
+  if (block_length < 1 || context.runs.size() < 2)
+  {
+    return false;
+  }
+  Eigen::VectorXd ensemble = Eigen::VectorXd::Zero(kAllanBlocks);
+  std::vector<Eigen::VectorXd> runs;
+  for (const Recording& run : context.runs)
+  {
+    runs.push_back(blockMeans(run, block_length).col(c));
+    ensemble += runs.back() / static_cast<double>(context.runs.size());
+  }
+  double spread2 = 0.0;
+  for (const Eigen::VectorXd& run : runs)
+  {
+    spread2 += (run - ensemble).squaredNorm() / (kAllanBlocks * (runs.size() - 1.0));
+  }
+  const Eigen::VectorXd y = blockMeans(context.real, block_length).col(c) - ensemble;
+  const double variance = (y.array() - y.mean()).square().sum();
+  if (!(variance > 16.0 * spread2 * kAllanBlocks))
+  {
+    return false;
+  }
+  Eigen::VectorXd t(kAllanBlocks);
+  for (int k = 0; k < kAllanBlocks; ++k)
+  {
+    t[k] = context.real.stamp[static_cast<std::size_t>((k + 0.5) * block_length)] - context.start;
+  }
+  // Offset, sine and cosine fitted at period p: the residual, and amplitude and phase of
+  // A sin(2 pi t / p + phase).
+  const auto fit = [&](double p, double* a, double* ph) {
+    Eigen::MatrixXd m(kAllanBlocks, 3);
+    m.col(0).setOnes();
+    m.col(1) = (2.0 * M_PI / p * t).array().sin();
+    m.col(2) = (2.0 * M_PI / p * t).array().cos();
+    const Eigen::Vector3d x = m.colPivHouseholderQr().solve(y);
+    *a = std::hypot(x[1], x[2]);
+    *ph = std::atan2(x[2], x[1]);
+    return (y - m * x).squaredNorm();
+  };
+  constexpr int kPeriods = 96;
+  const double span = kAllanBlocks * block_length / context.rate;
+  const auto grid = [span](double i) { return 0.4 * span * std::pow(10.0, i / (kPeriods - 1)); };
+  std::vector<double> residual(kPeriods);
+  double a = 0.0, ph = 0.0;
+  int best = 0;
+  for (int i = 0; i < kPeriods; ++i)
+  {
+    residual[i] = fit(grid(i), &a, &ph);
+    best = residual[i] < residual[best] ? i : best;
+  }
+  double at = best;
+  if (best > 0 && best + 1 < kPeriods)
+  {
+    const double curvature = residual[best - 1] - 2.0 * residual[best] + residual[best + 1];
+    at += curvature > 0.0 ? std::clamp(0.5 * (residual[best - 1] - residual[best + 1]) / curvature, -0.5, 0.5) : 0.0;
+  }
+  *period = grid(at);
+  return fit(*period, amplitude, phase) < 0.2 * variance;
+}
+
 std::optional<Fit> fitPeriodicBias(const FitContext& context)
 {
   const std::vector<Line>& lines = context.line_search.lines;
@@ -1173,7 +1241,13 @@ std::optional<Fit> fitPeriodicBias(const FitContext& context)
   bool any = false;
   for (int c = 0; c < kChannels; ++c)
   {
-    if (lines[c].power > 0 && lines[c].freq > 0)
+    const double span = context.samples / context.rate;
+    const bool slow = !(lines[c].power > 0 && lines[c].freq > 0) || lines[c].freq * span < 2.5;
+    if (slow && slowLine(context, c, &amp[c], &per[c], &ph[c]))
+    {
+      any = true;
+    }
+    else if (lines[c].power > 0 && lines[c].freq > 0)
     {
       double a = 0, p = 0;
       const double f = refineFrequency(context.real, &context.runs, c, lines[c].freq, context.real_stats.psd_fine[c].df,
@@ -1197,7 +1271,9 @@ std::optional<Fit> fitPeriodicBias(const FitContext& context)
   e.params["accel_phase"] = Vec(ph.begin(), ph.begin() + 3);
   e.params["gyro_phase"] = Vec(ph.begin() + 3, ph.end());
   specs.push_back(e);
-  return Fit{ specs, "strongest excess spectral line per axis: amplitude sqrt(2 P), period 1 / f" };
+  return Fit{ specs,
+              "strongest excess spectral line per axis: amplitude sqrt(2 P), period 1 / f; a line too slow "
+              "for the spectrum from the block means" };
 }
 
 /// Signed amplitude of a line at frequency f (PSD bin k0, width_bins wide) on every channel where

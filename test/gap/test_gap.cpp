@@ -523,3 +523,25 @@ int main(int argc, char** argv)
   testing::InitGoogleTest(&argc, argv);
   return RUN_ALL_TESTS();
 }
+
+TEST(GapDiagnose, NamesAPeriodicBiasTooSlowForTheSpectrum)
+{
+  // A bias of period 214 s, 1.7 cycles in the fit part of a 600 s recording: the Welch spectrum
+  // cannot resolve it; the block means can.
+  sim::Scenario base = sinusoidBase();
+  base.duration = 600.0;
+  sim::Scenario real_s = base;
+  sim::EffectSpec slow{ "periodic_bias", true, {} };
+  slow.params["accel_amplitude"] = { 0.04, 0.0, 0.0 };
+  slow.params["accel_period"] = { 214.0, 10.0, 10.0 };
+  slow.params["accel_phase"] = { 0.7, 0.0, 0.0 };
+  real_s.effects.push_back(slow);
+  const gap::Report rep = gap::diagnose(gap::simulateRecording(real_s, 2718), base, gap::DiagnoseOptions());
+  EXPECT_EQ(rep.verdict_effect, "periodic_bias") << gap::reportSummary(rep);
+  EXPECT_GT(rep.confidence, 0.5) << gap::reportSummary(rep);
+  if (rep.verdict_effect == "periodic_bias")
+  {
+    EXPECT_NEAR(rep.verdict_params.at("accel_period")[0].get<double>(), 214.0, 40.0) << rep.verdict_params.dump();
+    EXPECT_NEAR(rep.verdict_params.at("accel_amplitude")[0].get<double>(), 0.04, 0.01) << rep.verdict_params.dump();
+  }
+}
