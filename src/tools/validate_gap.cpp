@@ -1,11 +1,12 @@
 // validate_gap: the diagnosis checked on data whose effect is withheld. For every effect of the
-// simulator's vocabulary, several motions (static, sinusoids, sea), sizes and seeds: simulate a
-// "real" recording with that effect, hand diagnose() the scenario without it, and record whether
+// simulator's vocabulary, several motions (static, sinusoids, sea; seas written outside the
+// simulator; a real buoy's recorded motion), sizes and seeds: make a "real" recording with that effect, hand diagnose() the scenario without it, and record whether
 // the verdict names it and how far the gap shrinks on the withheld part. Cases without any
 // withheld effect check that no confident verdict is given.
 //
 //   validate_gap [--small] [--seeds N] [--duration S] [--rate HZ] [--md FILE] [--json FILE] [--quiet]
-//                [--effect NAME] [--motion static|sinusoids|sea|sea-foreign|hull-foreign] [--verbose] [--bench-hours H]
+//                [--effect NAME] [--motion static|sinusoids|sea|sea-foreign|hull-foreign|buoy-replay] [--verbose]
+//                [--bench-hours H] [--buoy CSV --buoy-scenario YAML]
 //
 // --md and --json are renamed into place when complete (tools/output_file.h).
 // Exit status: 0 targets met, 3 targets missed (the tables are printed either way), 1 error,
@@ -51,6 +52,8 @@ struct Options
   std::string only_effect;
   std::string only_motion;
   double bench_hours = 0.0;
+  std::string buoy;           ///< the moored buoy's recording (../shared/data/buoy_morro_bay)
+  std::string buoy_scenario;  ///< its plausible scenario (config/scenarios/gap_buoy_morro_bay.yaml)
 };
 
 /// The scenario the diagnosis is given for a motion: "static", "sinusoids", or otherwise ("sea",
@@ -194,20 +197,13 @@ std::vector<sim::EffectSpec> withheldEffect(const std::string& name, double k, c
   return { e };
 }
 
-/// Saturation limits just inside the base motion (clips the top 1 % of one accel and one gyro axis).
-sim::EffectSpec saturationFor(const sim::Scenario& base, double k)
+/// Saturation limits just inside the motion of r (clips the top 2k % of one accel and one gyro axis).
+sim::EffectSpec saturationFor(const gap::Recording& r, double k)
 {
-  const gap::Recording r = gap::simulateRecording(base, 777);
   std::vector<double> lim(6);
   for (int c = 0; c < 6; ++c)
   {
-    std::vector<double> a(r.size());
-    for (std::size_t i = 0; i < r.size(); ++i)
-    {
-      a[i] = std::abs(r.data(i, c));
-    }
-    std::sort(a.begin(), a.end());
-    lim[c] = a.back() * 2.0 + 1.0;
+    lim[c] = 2.0 * r.data.col(c).cwiseAbs().maxCoeff() + 1.0;
   }
   // clip az (gravity axis) and the busiest gyro axis at their 100 - 2k percentile
   auto pct = [&r](int c, double p) {
@@ -247,6 +243,10 @@ std::string sameSignal(const std::string& effect, const std::string& motion)
   if (motion == "static" && (effect == "scale_factor" || effect == "misalignment"))
   {
     return "at rest: acts on gravity only, the same signal as a constant bias";
+  }
+  if (motion == "buoy-replay" && effect == "thermal_drift")
+  {
+    return "the recording has no temperature";
   }
   return "";
 }
@@ -469,6 +469,148 @@ gap::Recording foreignRecording(const sim::Scenario& base, const std::string& ef
   return r;
 }
 
+/// The moored buoy's recording (MicroStrain 3DM-GX3, 10 Hz, with its own AHRS; ../shared/data/
+/// buoy_morro_bay): stamps from GPS time of week, specific force and rate turned from its z-down
+/// frame into a z-up one (180 degrees about x), and its NED roll, pitch, yaw (z-y-x) as the
+/// reported sensor -> ENU orientation.
+/// @throws std::runtime_error when the file cannot be read or lacks a column
+gap::Recording readBuoy(const std::string& path)
+{
+  std::ifstream in(path);
+  std::string line;
+  if (!in || !std::getline(in, line))
+  {
+    throw std::runtime_error("--buoy: cannot read " + path);
+  }
+  std::map<std::string, std::size_t> column;
+  {
+    std::stringstream header(line);
+    std::string name;
+    for (std::size_t i = 0; std::getline(header, name, ','); ++i)
+    {
+      column[name] = i;
+    }
+  }
+  const std::vector<std::string> wanted = { "gps_tow_s",    "accel_x_g",    "accel_y_g", "accel_z_g", "gyro_x_rad_s",
+                                            "gyro_y_rad_s", "gyro_z_rad_s", "roll_rad",  "pitch_rad", "yaw_rad" };
+  std::vector<std::size_t> index;
+  for (const auto& w : wanted)
+  {
+    if (column.count(w) == 0)
+    {
+      throw std::runtime_error("--buoy: " + path + " has no column " + w);
+    }
+    index.push_back(column.at(w));
+  }
+  constexpr double kG = 9.80665;
+  const Eigen::Vector3d flip(1.0, -1.0, -1.0);
+  // ENU from NED, and the z-up body from the z-down one
+  const Eigen::Quaterniond enu_ned(Eigen::Matrix3d((Eigen::Matrix3d() << 0, 1, 0, 1, 0, 0, 0, 0, -1).finished()));
+  const Eigen::Quaterniond down_up(Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitX()));
+  std::vector<std::array<double, 10>> rows;
+  while (std::getline(in, line))
+  {
+    std::vector<std::string> fields;
+    std::stringstream ss(line);
+    for (std::string f; std::getline(ss, f, ',');)
+    {
+      fields.push_back(f);
+    }
+    std::array<double, 10> v{};
+    bool ok = true;
+    for (std::size_t j = 0; j < index.size() && ok; ++j)
+    {
+      char* end = nullptr;
+      ok = index[j] < fields.size();
+      v[j] = ok ? std::strtod(fields[index[j]].c_str(), &end) : 0.0;
+      ok = ok && end != fields[index[j]].c_str() && std::isfinite(v[j]);
+    }
+    if (ok)
+    {
+      rows.push_back(v);
+    }
+  }
+  if (rows.size() < 200)
+  {
+    throw std::runtime_error("--buoy: " + path + ": only " + std::to_string(rows.size()) + " data lines");
+  }
+  gap::Recording r;
+  r.source = path;
+  r.has_orientation = true;
+  r.data.resize(static_cast<Eigen::Index>(rows.size()), gap::kChannels);
+  for (std::size_t i = 0; i < rows.size(); ++i)
+  {
+    const auto& v = rows[i];
+    r.stamp.push_back(v[0] - rows[0][0]);
+    const Eigen::Index row = static_cast<Eigen::Index>(i);
+    r.data.row(row).head<3>() = (Eigen::Vector3d(v[1], v[2], v[3]) * kG).cwiseProduct(flip).transpose();
+    r.data.row(row).tail<3>() = Eigen::Vector3d(v[4], v[5], v[6]).cwiseProduct(flip).transpose();
+    const Eigen::Quaterniond ned_frd = Eigen::AngleAxisd(v[9], Eigen::Vector3d::UnitZ()) *
+                                       Eigen::AngleAxisd(v[8], Eigen::Vector3d::UnitY()) *
+                                       Eigen::AngleAxisd(v[7], Eigen::Vector3d::UnitX());
+    r.orientation.push_back((enu_ned * ned_frd * down_up).normalized());
+  }
+  r.rate = gap::estimateRate(r);
+  return r;
+}
+
+/// The recorded motion replayed as truth under simulated sensor effects: each sample's specific
+/// force, rate and orientation go through the simulator's effects (their own random streams from
+/// `seed`) as if they were the ideal sensor's; the angular acceleration a lever arm needs is the
+/// central difference of the recorded rate. Samples the effects drop are left out.
+gap::Recording replayRecording(const gap::Recording& motion, const std::vector<sim::EffectSpec>& effects,
+                               std::uint64_t seed)
+{
+  std::vector<std::unique_ptr<sim::Effect>> made;
+  for (std::size_t i = 0; i < effects.size(); ++i)
+  {
+    made.push_back(sim::makeEffect(sim::completeEffect(effects[i]), seed * 131 + i, motion.rate));
+  }
+  gap::Recording r = motion;
+  r.stamp.clear();
+  r.orientation.clear();
+  std::size_t kept = 0;
+  const std::size_t n = motion.size();
+  for (std::size_t i = 0; i < n; ++i)
+  {
+    const std::size_t before = i > 0 ? i - 1 : 0, after = std::min(n - 1, i + 1);
+    const double span = motion.stamp[after] - motion.stamp[before];
+    sim::Truth truth;
+    truth.attitude = motion.orientation[i];
+    truth.angular_rate = motion.data.row(static_cast<Eigen::Index>(i)).tail<3>().transpose();
+    if (span > 0.0)
+    {
+      truth.angular_acceleration = (motion.data.row(static_cast<Eigen::Index>(after)).tail<3>() -
+                                    motion.data.row(static_cast<Eigen::Index>(before)).tail<3>())
+                                       .transpose() /
+                                   span;
+    }
+    sim::EffectInput in;
+    in.elapsed = motion.stamp[i] - motion.stamp[0];
+    in.truth = &truth;
+    sim::ImuOutput out;
+    out.accel = motion.data.row(static_cast<Eigen::Index>(i)).head<3>().transpose();
+    out.gyro = truth.angular_rate;
+    out.orientation = truth.attitude;
+    for (const auto& effect : made)
+    {
+      effect->apply(in, out);
+    }
+    if (out.dropped)
+    {
+      continue;
+    }
+    r.stamp.push_back(motion.stamp[i] + out.stamp_offset);
+    r.orientation.push_back(out.orientation);
+    r.data.row(static_cast<Eigen::Index>(kept)).head<3>() = out.accel.transpose();
+    r.data.row(static_cast<Eigen::Index>(kept)).tail<3>() = out.gyro.transpose();
+    ++kept;
+  }
+  r.data.conservativeResize(static_cast<Eigen::Index>(kept), gap::kChannels);
+  r.source = "buoy replay";
+  return r;
+}
+
 struct CaseResult
 {
   std::string motion, effect, verdict;
@@ -526,12 +668,18 @@ Grid caseGrid(const Options& opt)
   // "hull-foreign": a hull in a sea of hullMotion() (not the simulator's), against the sea scenario.
   // "sea-foreign": the same sea, but "real" is written by foreignRecording() (another noise
   // generator, other motion details), for the effects it knows.
+  // "buoy-replay": the recorded buoy's motion under simulated effects, against its plausible
+  // scenario (only with --buoy).
   Grid grid = { { "static", "sinusoids", "sea", "sea-foreign", "hull-foreign" }, { 1.0, 0.3 }, opt.seeds };
   if (opt.small)
   {
-    grid.motions = { "sinusoids", "sea-foreign" };
+    grid.motions = { "sinusoids", "sea-foreign", "hull-foreign" };
     grid.sizes = { 1.0 };
     grid.seeds = 1;
+  }
+  if (!opt.buoy.empty())
+  {
+    grid.motions.push_back("buoy-replay");
   }
   if (!opt.only_motion.empty())
   {
@@ -552,22 +700,26 @@ bool isHull(const std::string& motion)
   return motion.rfind("hull", 0) == 0;
 }
 
-/// The (effect, size) cases of one motion, those without a withheld effect last.
-std::vector<std::pair<std::string, double>> motionCases(bool foreign, bool small, const std::vector<double>& sizes)
+/// The (effect, size) cases of a motion, those without a withheld effect last: in the small form
+/// only vibration on the motions written outside the simulator; one case without an effect on a
+/// replayed recording, two otherwise.
+std::vector<std::pair<std::string, double>> motionCases(const std::string& motion, bool small,
+                                                        const std::vector<double>& sizes)
 {
+  const bool outside = isForeign(motion) || motion == "buoy-replay";
   std::vector<std::pair<std::string, double>> cases;
-  for (const auto& e : foreign ? foreignEffects() : simulatorEffects())
+  for (const auto& e : isForeign(motion) ? foreignEffects() : simulatorEffects())
   {
     for (double k : sizes)
     {
-      if (!(foreign && small && e != "vibration"))
+      if (!(outside && small && e != "vibration"))
       {
         cases.push_back({ e, k });
       }
     }
   }
   cases.push_back({ "none", 0.0 });
-  if (!small)
+  if (!small && motion != "buoy-replay")
   {
     cases.push_back({ "none", 0.0 });
   }
@@ -580,7 +732,7 @@ sim::Scenario withheldScenario(const sim::Scenario& base, const std::string& eff
   sim::Scenario real_s = base;
   if (effect == "saturation")
   {
-    real_s.effects.push_back(saturationFor(base, k));
+    real_s.effects.push_back(saturationFor(gap::simulateRecording(base, 777), k));
   }
   else if (effect == "white_noise")
   {
@@ -644,10 +796,30 @@ void takeReport(const gap::Report& rep, CaseResult* cr)
 
 /// Simulates the case's "real" recording, diagnoses it against base and scores the verdict (an
 /// error of the diagnosis is the verdict "error: ...").
-CaseResult runCase(const Case& c, const sim::Scenario& base, bool verbose)
+CaseResult runCase(const Case& c, const sim::Scenario& base, const gap::Recording* replayed, bool verbose)
 {
   const bool foreign = isForeign(c.motion);
-  const sim::Scenario real_s = withheldScenario(base, c.effect, c.k);
+  // the "real" recording of the case and its twin without the withheld effect
+  const auto recording = [&](const std::string& effect, double k) {
+    if (replayed)
+    {
+      std::vector<sim::EffectSpec> effects;
+      if (effect == "saturation")
+      {
+        effects.push_back(saturationFor(*replayed, k));
+      }
+      else if (effect != "none")
+      {
+        effects = withheldEffect(effect, k, base);
+      }
+      return replayRecording(*replayed, effects, c.seed);
+    }
+    if (foreign)
+    {
+      return foreignRecording(base, effect, k, c.seed, isHull(c.motion));
+    }
+    return gap::simulateRecording(effect == "none" ? base : withheldScenario(base, effect, k), c.seed);
+  };
   const gap::DiagnoseOptions dopt;
   CaseResult cr;
   cr.motion = c.motion;
@@ -657,14 +829,12 @@ CaseResult runCase(const Case& c, const sim::Scenario& base, bool verbose)
   cr.why = sameSignal(c.effect, c.motion);
   try
   {
-    gap::Recording real = foreign ? foreignRecording(base, c.effect, c.k, c.seed, isHull(c.motion))
-                                  : gap::simulateRecording(real_s, c.seed);
+    gap::Recording real = recording(c.effect, c.k);
     real.source = "validate " + c.motion + " " + c.effect;
     const gap::Report rep = gap::diagnose(real, base, dopt);
     if (c.effect != "none")
     {
-      const gap::Recording twin = foreign ? foreignRecording(base, "none", 0.0, c.seed, isHull(c.motion))
-                                          : gap::simulateRecording(base, c.seed);
+      const gap::Recording twin = recording("none", 0.0);
       const Detectability d = effectShift(real, twin, c.effect, rep, dopt.fit_fraction);
       cr.effect_gap = d.gap;
       cr.effect_max_z = d.max_z;
@@ -692,12 +862,25 @@ std::vector<CaseResult> runCases(const Options& opt, const Grid& grid)
 {
   std::vector<CaseResult> results;
   int case_index = 0;
+  std::optional<gap::Recording> buoy;
   for (const std::string& motion : grid.motions)
   {
     const bool foreign = isForeign(motion);
-    const sim::Scenario base =
-        baseScenario(foreign ? motion.substr(0, motion.size() - 8) : motion, opt.rate, opt.duration);
-    for (const auto& [effect, k] : motionCases(foreign, opt.small, grid.sizes))
+    sim::Scenario base;
+    if (motion == "buoy-replay")
+    {
+      if (opt.buoy.empty())
+      {
+        throw std::runtime_error("--motion buoy-replay needs --buoy and --buoy-scenario");
+      }
+      buoy = readBuoy(opt.buoy);
+      base = gap::matchScenario(sim::loadScenario(opt.buoy_scenario), *buoy);
+    }
+    else
+    {
+      base = baseScenario(foreign ? motion.substr(0, motion.size() - 8) : motion, opt.rate, opt.duration);
+    }
+    for (const auto& [effect, k] : motionCases(motion, opt.small, grid.sizes))
     {
       if (!opt.only_effect.empty() && effect != opt.only_effect)
       {
@@ -705,9 +888,13 @@ std::vector<CaseResult> runCases(const Options& opt, const Grid& grid)
       }
       for (int sd = 0; sd < grid.seeds; ++sd)
       {
+        if (motion == "buoy-replay" && effect == "none" && sd > 0)
+        {
+          break;  // the recording as it is: the same case whatever the seed
+        }
         ++case_index;
         const Case c = { motion, effect, k, static_cast<std::uint64_t>(5000 + 37 * sd + case_index) };
-        const CaseResult cr = runCase(c, base, opt.verbose);
+        const CaseResult cr = runCase(c, base, motion == "buoy-replay" ? &*buoy : nullptr, opt.verbose);
         if (!opt.quiet)
         {
           std::fprintf(stderr,
@@ -812,7 +999,12 @@ std::string summaryMarkdown(const Options& opt, const Grid& grid, std::size_t ca
   {
     md << " " << k;
   }
-  md << "; " << grid.seeds << " seed(s)), wall " << static_cast<int>(wall) << " s\n\n";
+  md << "; " << grid.seeds << " seed(s)";
+  if (std::find(grid.motions.begin(), grid.motions.end(), "buoy-replay") != grid.motions.end())
+  {
+    md << "; buoy-replay at the recording's own span and rate";
+  }
+  md << "), wall " << static_cast<int>(wall) << " s\n\n";
   char buf[512];
   std::snprintf(buf, sizeof(buf),
                 "named correctly: %d of %d detectable cases (%.1f %%); median shrink on withheld data (correctly "
@@ -965,9 +1157,11 @@ int main(int argc, char** argv)
   pbc::CommandLine cli(
       "usage: validate_gap [--small] [--seeds N] [--duration S] [--rate HZ] [--md FILE] [--json FILE]\n"
       "                    [--quiet] [--verbose] [--effect NAME] [--motion NAME] [--bench-hours H]\n"
+      "                    [--buoy CSV --buoy-scenario YAML]\n"
       "Withholds each named effect from a simulated 'real' recording, diagnoses the gap against the\n"
       "scenario without it and scores the verdicts (docs/gap.md). --bench-hours H times one diagnosis\n"
-      "of H hours of 100 Hz data instead.\n");
+      "of H hours of 100 Hz data instead. --buoy adds the motion 'buoy-replay': the moored buoy's\n"
+      "recording (../shared/data/buoy_morro_bay) under simulated effects, against YAML.\n");
   cli.flag("--small", &opt.small)
       .integer("--seeds", &opt.seeds)
       .number("--duration", &opt.duration)
@@ -978,12 +1172,17 @@ int main(int argc, char** argv)
       .flag("--verbose", &opt.verbose)
       .text("--effect", &opt.only_effect)
       .text("--motion", &opt.only_motion)
-      .number("--bench-hours", &opt.bench_hours);
+      .number("--bench-hours", &opt.bench_hours)
+      .text("--buoy", &opt.buoy)
+      .text("--buoy-scenario", &opt.buoy_scenario);
   try
   {
     if (!cli.parse(argc, argv))
       return 0;
-    pbc::refuseOverwritingInputs({}, { { "--md", opt.md }, { "--json", opt.json } });
+    if (opt.buoy.empty() != opt.buoy_scenario.empty())
+      throw pbc::UsageError("--buoy and --buoy-scenario go together");
+    pbc::refuseOverwritingInputs({ { "--buoy", opt.buoy }, { "--buoy-scenario", opt.buoy_scenario } },
+                                 { { "--md", opt.md }, { "--json", opt.json } });
   }
   catch (const pbc::UsageError& e)
   {

@@ -308,6 +308,44 @@ TEST(GapValidate, SmallFormMeetsTheTargets)
   EXPECT_NE(r.output.find("TARGETS MET"), std::string::npos) << r.output;
 }
 
+TEST(GapValidate, ARealBuoysMotionUnderSimulatedEffectsGetsNoConfidentWrongVerdict)
+{
+  const fs::path data =
+      fs::path(PBC_SOURCE_DIR) / ".." / "shared" / "data" / "buoy_morro_bay" / "morro_bay_z06_20201201_imu.csv";
+  if (!fs::exists(data))
+  {
+    GTEST_SKIP() << "real data absent (" << data.string() << "): skipped";
+  }
+#ifdef PBC_SANITIZED
+  const std::string cases = " --effect none";  // the replay and the motion stage, without the slow twin
+#else
+  const std::string cases;
+#endif
+  const std::string dir = tempDir();
+  const CommandResult r = shell(std::string(PBC_VALIDATE_GAP) + " --small --quiet --motion buoy-replay --buoy " +
+                                data.string() + " --buoy-scenario " + PBC_SOURCE_DIR +
+                                "/config/scenarios/gap_buoy_morro_bay.yaml --json " + dir + "/buoy.json" + cases);
+  // 0 or 3: whether the withheld effect is named on this motion is reported (docs/gap.md), not
+  // asserted; a confident verdict that names another effect, or none on the recording as it is,
+  // would be wrong.
+  ASSERT_TRUE(r.status == 0 || r.status == 3) << r.output;
+  const nlohmann::json json = nlohmann::json::parse(readAll(dir + "/buoy.json"));
+  ASSERT_FALSE(json.at("cases").empty()) << json.dump(2);
+  bool null_seen = false;
+  for (const auto& c : json.at("cases"))
+  {
+    EXPECT_EQ(c.at("motion"), "buoy-replay");
+    // The recorded sea is not the scenario's 4 s wind sea.
+    EXPECT_TRUE(c.at("motion_differs").get<bool>()) << c.dump();
+    if (c.at("verdict").get<std::string>().find(c.at("effect").get<std::string>()) == std::string::npos)
+    {
+      EXPECT_LT(c.at("confidence").get<double>(), 0.5) << c.dump();
+    }
+    null_seen |= c.at("effect") == "none";
+  }
+  EXPECT_TRUE(null_seen) << json.dump(2);
+}
+
 TEST(GapTool, DiagnosesASimulatedBagAndACsv)
 {
   const std::string dir = tempDir();
