@@ -211,18 +211,22 @@ DiagnoseContext prepare(const Recording& real_in, const sim::Scenario& scenario_
 
 /// Simulates the base ensemble of the context's scenario. With a truth in the recording, each
 /// run's residual against its own truth (then dropped: it is large) is reduced to the truth
-/// features at once; the plot curves of the runs are taken on the way.
-void simulateBase(const DiagnoseContext& context, BaseEnsemble* base)
+/// features at once; the plot curves of the runs are taken on the way. `simulated`, when given
+/// and the recording has no truth: the runs of the context's scenario with its seeds, already
+/// simulated (they are taken instead of simulated again).
+void simulateBase(const DiagnoseContext& context, BaseEnsemble* base, std::vector<Recording>* simulated = nullptr)
 {
   const int runs = context.runs;
   const DiagnoseOptions& opt = context.opt;
-  base->runs.resize(runs);
+  const bool reuse = simulated && !context.truth && static_cast<int>(simulated->size()) == runs;
+  base->runs = reuse ? std::move(*simulated) : std::vector<Recording>(runs);
   base->curves.resize(runs);
   base->truth_members.resize(context.truth ? runs : 0);
   base->truth_runs.resize(context.truth ? runs : 0);
   parallelFor(runs, opt.threads, [&](int i) {
     Recording& run = base->runs[i];
-    run = simulateRecording(context.scenario, context.seed(i), context.truth);
+    if (!reuse)
+      run = simulateRecording(context.scenario, context.seed(i), context.truth);
     run.rate = context.real.rate;
     base->curves[i] = curvesOf(run, opt.fit_fraction, context.real.rate, context.nseg, context.allan_m);
     if (context.truth)
@@ -255,13 +259,21 @@ const std::vector<double> kCoherenceTrials = { 0.5, 0.0 };
 /// scenario of the base ensemble.
 void motionStage(DiagnoseContext* context, BaseEnsemble* base, Report* rep)
 {
-  rep->motion = fitMotion(context->real, context->scenario, base->runs);
+  // The motion summaries of an ensemble's runs, in threads.
+  const auto summaries = [&](const std::vector<Recording>& runs) {
+    std::vector<MotionSummary> out(runs.size());
+    parallelFor(static_cast<int>(runs.size()), context->opt.threads, [&](int i) { out[i] = summariseMotion(runs[i]); });
+    return out;
+  };
+  const MotionSummary real = summariseMotion(context->real);
+  std::vector<MotionSummary> best_summaries = summaries(base->runs);
+  rep->motion = fitMotion(real, context->scenario, best_summaries);
   if (!rep->motion.differs)
   {
     // With the tilt, heading and sea state as the scenario's, only a rotation's response says the
     // motion differs: surge and sway differences are left to the accelerometer's effects.
     std::vector<std::string> unused;
-    if (!fitWaveResponses(context->real, context->scenario, base->runs, &unused, true))
+    if (!fitWaveResponses(real, context->scenario, best_summaries, &unused, true))
     {
       return;
     }
@@ -269,7 +281,7 @@ void motionStage(DiagnoseContext* context, BaseEnsemble* base, Report* rep)
   }
   rep->motion.gap_before = heldGap(*context, *rep, base->runs);
   double best = rep->motion.gap_before;
-  std::vector<Recording> best_runs = base->runs;
+  std::vector<Recording> best_runs;  // the adopted fit's runs (empty: the base's)
   // Each candidate's ensemble, and its withheld gap; the closest is adopted.
   const auto consider = [&](const MotionCandidate& candidate) {
     std::vector<Recording> runs(context->runs);
@@ -282,7 +294,13 @@ void motionStage(DiagnoseContext* context, BaseEnsemble* base, Report* rep)
       rep->motion.adopted = candidate.what;
       rep->motion.fitted = candidate.scenario;
       best_runs = std::move(runs);
+      best_summaries.clear();  // summarised when needed
     }
+  };
+  const auto adopted_summaries = [&]() -> const std::vector<MotionSummary>& {
+    if (best_summaries.empty())
+      best_summaries = summaries(best_runs);
+    return best_summaries;
   };
   for (const MotionCandidate& candidate : rep->motion.candidates)
   {
@@ -296,7 +314,7 @@ void motionStage(DiagnoseContext* context, BaseEnsemble* base, Report* rep)
     return rep->motion.adopted.empty() ? what : rep->motion.adopted + ", " + what;
   };
   const auto responses = [&]() {
-    std::optional<MotionCandidate> fit = fitWaveResponses(context->real, current(), best_runs, &rep->motion.findings);
+    std::optional<MotionCandidate> fit = fitWaveResponses(real, current(), adopted_summaries(), &rep->motion.findings);
     if (fit)
     {
       fit->what = label(fit->what);
@@ -328,11 +346,11 @@ void motionStage(DiagnoseContext* context, BaseEnsemble* base, Report* rep)
     trials("response coherence", kCoherenceTrials, [](double v, sim::Sea* sea) { sea->response_coherence = v; });
     responses();
   }
-  rep->motion_csv = motionCsv(rep->motion, best_runs);
+  rep->motion_csv = motionCsv(rep->motion, adopted_summaries());
   if (!rep->motion.adopted.empty())
   {
     context->scenario = rep->motion.fitted;
-    simulateBase(*context, base);
+    simulateBase(*context, base, &best_runs);
   }
 }
 
@@ -548,7 +566,7 @@ void nameLineByFrequency(std::vector<Candidate>* list)
       f = c.specs.back().params.at("frequency")[0];
     }
   }
-  const std::string want = f > 1.0 ? "vibration" : "periodic_bias";
+  const std::string want = f > kVibrationMinFrequency ? "vibration" : "periodic_bias";
   if (twin > 0 && f >= 0.0 && cands[twin].effect == want)
   {
     toFront(list, twin);

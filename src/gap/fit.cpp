@@ -537,11 +537,6 @@ struct AllanExcess
 };
 
 /// The strongest excess spectral line per channel and the ensemble's mean fine PSD.
-/// Vibration lines are searched from here up: an engine's or a propeller's; a slower line is a
-/// periodic bias (the naming rule of docs/gap.md), and a sea whose motion the scenario matches
-/// only roughly leaves excess lines in its wave band that are not the sensor's [Hz].
-constexpr double kVibrationMinFrequency = 1.0;
-
 struct LineSearch
 {
   std::vector<Line> lines;       ///< per channel (power 0: none)

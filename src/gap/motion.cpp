@@ -168,14 +168,11 @@ MotionSummary summariseMotion(const Recording& r)
   return m;
 }
 
-MotionFit fitMotion(const Recording& real, const sim::Scenario& scenario, const std::vector<Recording>& runs)
+MotionFit fitMotion(const MotionSummary& real, const sim::Scenario& scenario, const std::vector<MotionSummary>& sims)
 {
   MotionFit fit;
   fit.fitted = scenario;
-  fit.real = summariseMotion(real);
-  std::vector<MotionSummary> sims;
-  for (const Recording& run : runs)
-    sims.push_back(summariseMotion(run));
+  fit.real = real;
   if (sims.empty())
     return fit;
   const Spread roll = spreadOf(sims, [](const MotionSummary& m) { return m.roll; });
@@ -283,16 +280,12 @@ MotionFit fitMotion(const Recording& real, const sim::Scenario& scenario, const 
   return fit;
 }
 
-std::optional<MotionCandidate> fitWaveResponses(const Recording& real, const sim::Scenario& scenario,
-                                                const std::vector<Recording>& runs, std::vector<std::string>* findings,
-                                                bool rotations_only)
+std::optional<MotionCandidate> fitWaveResponses(const MotionSummary& r, const sim::Scenario& scenario,
+                                                const std::vector<MotionSummary>& sims,
+                                                std::vector<std::string>* findings, bool rotations_only)
 {
-  if (!hasSea(scenario) || runs.empty())
+  if (!hasSea(scenario) || sims.empty())
     return std::nullopt;
-  const MotionSummary r = summariseMotion(real);
-  std::vector<MotionSummary> sims;
-  for (const Recording& run : runs)
-    sims.push_back(summariseMotion(run));
   static const char* const kDof[6] = { "surge", "sway", "heave", "roll", "pitch", "yaw" };
   MotionCandidate candidate{ "wave responses", scenario };
   std::string changed;
@@ -316,11 +309,8 @@ std::optional<MotionCandidate> fitWaveResponses(const Recording& real, const sim
   return candidate;
 }
 
-std::string motionCsv(const MotionFit& fit, const std::vector<Recording>& fitted_runs)
+std::string motionCsv(const MotionFit& fit, const std::vector<MotionSummary>& fitted)
 {
-  std::vector<MotionSummary> fitted;
-  for (const Recording& run : fitted_runs)
-    fitted.push_back(summariseMotion(run));
   const std::vector<double> fitted_density = meanHeaveDensity(fitted);
   std::string csv = "f,real,given,fitted\n";
   const std::vector<double>& f = fit.real.heave_frequency;

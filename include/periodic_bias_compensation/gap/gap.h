@@ -238,6 +238,12 @@ std::vector<double> zScores(const std::vector<double>& features, const EnsembleS
 constexpr double kZThreshold = 3.0;
 double gapOf(const std::vector<double>& z);
 
+/// The vocabulary's boundary between a spectral line's two names: from here up a vibration (an
+/// engine's or a propeller's), below a periodic bias. The vibration fitter searches from here up:
+/// a sea whose motion the scenario matches only roughly leaves excess lines in its wave band
+/// that are not the sensor's [Hz].
+constexpr double kVibrationMinFrequency = 1.0;
+
 /// Gap of a candidate model: as gapOf(), plus kSpreadPenalty * max(0, ln(spread / base spread))
 /// per feature, so that a model cannot explain a departure merely by being vaguer (a log-score
 /// idea: a wider predictive spread costs its logarithm).
@@ -342,23 +348,24 @@ struct MotionFit
 /// mean); a heading beyond 0.05 rad a candidate heading (not for routes); a heave Hs or peak
 /// period 15 % and three ensemble spreads off a candidate sea, every wave system's height and
 /// period rescaled alike. `fitted` is left as given: the caller adopts a candidate (diagnose:
-/// the one that brings the withheld part closest, if any does).
-MotionFit fitMotion(const Recording& real, const sim::Scenario& scenario, const std::vector<Recording>& runs);
+/// the one that brings the withheld part closest, if any does). `real` and `runs` are the
+/// summaries (summariseMotion) of the recording and of the runs.
+MotionFit fitMotion(const MotionSummary& real, const sim::Scenario& scenario, const std::vector<MotionSummary>& runs);
 
 /// The scenario's sea responses (sim::Sea::response) of surge, sway, roll, pitch and yaw scaled
 /// by the recording's wave-band RMS of each over the runs' mean, where it is 15 % and three
-/// spreads off (at most 5); nullopt when none is, or the scenario has no sea. The runs are of
-/// `scenario` (after its sea state is fitted: the heave is left to it). Adds a finding. With
+/// spreads off (at most 5); nullopt when none is, or the scenario has no sea. The runs' summaries
+/// are of `scenario` (after its sea state is fitted: the heave is left to it). Adds a finding. With
 /// `rotations_only`, roll, pitch and yaw alone (the gyro's: a lever arm, a scale factor or a
 /// misalignment of the accelerometer changes surge and sway, not them).
-std::optional<MotionCandidate> fitWaveResponses(const Recording& real, const sim::Scenario& scenario,
-                                                const std::vector<Recording>& runs, std::vector<std::string>* findings,
-                                                bool rotations_only = false);
+std::optional<MotionCandidate> fitWaveResponses(const MotionSummary& real, const sim::Scenario& scenario,
+                                                const std::vector<MotionSummary>& runs,
+                                                std::vector<std::string>* findings, bool rotations_only = false);
 
 /// The heave spectra of the motion stage as CSV, "f,real,given,fitted" [Hz, m^2/Hz]: the
 /// recording's, the mean of the scenario's runs as given, and the mean of `fitted_runs` (the
-/// adopted fit's).
-std::string motionCsv(const MotionFit& fit, const std::vector<Recording>& fitted_runs);
+/// summaries of the adopted fit's runs).
+std::string motionCsv(const MotionFit& fit, const std::vector<MotionSummary>& fitted_runs);
 
 /// Directly visible effect (stamps, lattice, clipping, gaps).
 struct DirectDetection
