@@ -18,12 +18,10 @@
 #include "periodic_bias_compensation/core/frequency_tracker.h"
 #include "periodic_bias_compensation/core/gyro_attitude.h"
 #include "periodic_bias_compensation/core/time_base.h"
+#include "periodic_bias_compensation/core/types.h"
 
 namespace periodic_bias_compensation
 {
-using Vector3 = Eigen::Vector3d;
-using Quaternion = Eigen::Quaterniond;
-
 /// Standard gravity [m/s^2] (REP-103: ENU, z up; a sensor at rest reads +g on its up axis).
 constexpr double kStandardGravity = 9.80665;
 

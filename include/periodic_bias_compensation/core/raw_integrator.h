@@ -3,7 +3,7 @@
 // bias removed, nothing else), and the benchmark's "raw" method (nothing removed).
 #pragma once
 
-#include "periodic_bias_compensation/core/compensator.h"
+#include "periodic_bias_compensation/core/types.h"
 
 namespace periodic_bias_compensation
 {
