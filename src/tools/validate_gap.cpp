@@ -44,6 +44,7 @@ struct Options
   bool small = false;
   int seeds = 2;
   double duration = 300.0;
+  bool duration_given = false;  ///< --duration given: the buoy's recording is cut to it too
   double rate = 50.0;
   std::string md;
   std::string json;
@@ -874,6 +875,11 @@ std::vector<CaseResult> runCases(const Options& opt, const Grid& grid)
         throw std::runtime_error("--motion buoy-replay needs --buoy and --buoy-scenario");
       }
       buoy = readBuoy(opt.buoy);
+      if (opt.duration_given)
+      {
+        const double span = buoy->stamp.back() - buoy->stamp.front() + 1.0 / buoy->rate;
+        buoy = gap::sliceFraction(*buoy, 0.0, opt.duration / span);
+      }
       base = gap::matchScenario(sim::loadScenario(opt.buoy_scenario), *buoy);
     }
     else
@@ -1002,7 +1008,8 @@ std::string summaryMarkdown(const Options& opt, const Grid& grid, std::size_t ca
   md << "; " << grid.seeds << " seed(s)";
   if (std::find(grid.motions.begin(), grid.motions.end(), "buoy-replay") != grid.motions.end())
   {
-    md << "; buoy-replay at the recording's own span and rate";
+    md << "; buoy-replay at the recording's own rate, "
+       << (opt.duration_given ? "its first " + std::to_string(static_cast<int>(opt.duration)) + " s" : "all of it");
   }
   md << "), wall " << static_cast<int>(wall) << " s\n\n";
   char buf[512];
@@ -1161,10 +1168,11 @@ int main(int argc, char** argv)
       "Withholds each named effect from a simulated 'real' recording, diagnoses the gap against the\n"
       "scenario without it and scores the verdicts (docs/gap.md). --bench-hours H times one diagnosis\n"
       "of H hours of 100 Hz data instead. --buoy adds the motion 'buoy-replay': the moored buoy's\n"
-      "recording (../shared/data/buoy_morro_bay) under simulated effects, against YAML.\n");
+      "recording (../shared/data/buoy_morro_bay) under simulated effects, against YAML (all of it,\n"
+      "or its first S seconds when --duration S is given).\n");
   cli.flag("--small", &opt.small)
       .integer("--seeds", &opt.seeds)
-      .number("--duration", &opt.duration)
+      .number("--duration", &opt.duration, &opt.duration_given)
       .number("--rate", &opt.rate)
       .text("--md", &opt.md)
       .text("--json", &opt.json)

@@ -317,7 +317,8 @@ TEST(GapValidate, ARealBuoysMotionUnderSimulatedEffectsGetsNoConfidentWrongVerdi
     GTEST_SKIP() << "real data absent (" << data.string() << "): skipped";
   }
 #ifdef PBC_SANITIZED
-  const std::string cases = " --effect none";  // the replay and the motion stage, without the slow twin
+  // the replay and the motion stage on the first 10 minutes, without a withheld effect
+  const std::string cases = " --effect none --duration 600";
 #else
   const std::string cases;
 #endif
