@@ -14,7 +14,8 @@ void BroadbandWave::configure(double corner_frequency, double min_frequency)
 {
   min_frequency_ = min_frequency;
   fixed_.setCornerFrequency(corner_frequency);
-  residual_heave_.setCornerFrequency(corner_frequency);
+  for (HeaveFilter& filter : residual_heave_)
+    filter.setCornerFrequency(corner_frequency);
   spectral_.setMinFrequency(kBandEdge * min_frequency);
   reset();
 }
@@ -23,9 +24,10 @@ void BroadbandWave::reset()
 {
   fixed_.reset();
   spectral_.reset();
-  residual_heave_.reset();
+  for (HeaveFilter& filter : residual_heave_)
+    filter.reset();
   residual_high_ = {};
-  residual_band_variance_ = 0.0;
+  residual_band_variance_ = {};
   difference_variance_ = 0.0;
   residual_samples_ = 0.0;
   samples_ = 0.0;
@@ -81,16 +83,23 @@ BroadbandWaveOutput BroadbandWave::update(const BroadbandWaveInput& in)
     {
       const double high = std::exp(-dt * 2.0 * M_PI * min_frequency_);
       double band = in.residual;
-      for (auto& stage : residual_high_)
+      std::array<double, 2> bands{};
+      for (std::size_t s = 0; s < residual_high_.size(); ++s)
       {
+        HighPass& stage = residual_high_[s];
         stage.output = residual_samples_ > 0.0 ? high * (stage.output + band - stage.input) : 0.0;
         stage.input = band;
         band = stage.output;
+        if (s == 1 || s == 3)
+          bands[s / 2] = band;
       }
-      const double missed = residual_heave_.update(band, residual_samples_ > 0.0 ? dt : 0.0).position;
       residual_samples_ += 1.0;
-      residual_band_variance_ +=
-          std::max(minute, 1.0 / residual_samples_) * (missed * missed - residual_band_variance_);
+      for (std::size_t j = 0; j < bands.size(); ++j)
+      {
+        const double missed = residual_heave_[j].update(bands[j], residual_samples_ > 1.0 ? dt : 0.0).position;
+        residual_band_variance_[j] +=
+            std::max(minute, 1.0 / residual_samples_) * (missed * missed - residual_band_variance_[j]);
+      }
       const double difference = in.harmonic_position - out.estimate.position;
       difference_variance_ +=
           std::max(minute, 1.0 / residual_samples_) * (difference * difference - difference_variance_);
@@ -103,11 +112,13 @@ BroadbandWaveOutput BroadbandWave::update(const BroadbandWaveInput& in)
   }
   previous_raw_ = in.raw;
 
-  // Less the white noise through the two high-passes and the filter (about 1 / s^2 there):
-  // n^2 integral of df / (omega^2 + omega_h^2)^2 = n^2 / (8 omega_h^3).
+  // Less the white noise through the high-passes and the filter (about 1 / s^2 there): n^2 times
+  // the integral of omega^(2m - 4) df / (omega^2 + omega_h^2)^m over m high-passes,
+  // 1 / (8 omega_h^3) for two, 1 / (64 omega_h^3) for four.
   const double omega_h = 2.0 * M_PI * min_frequency_;
-  const double missed =
-      std::max(0.0, residual_band_variance_ - noiseDensitySquared(in.rate) / (8.0 * omega_h * omega_h * omega_h));
+  const bool four = vertical_ && !spectral_.designed();
+  const double noise = noiseDensitySquared(in.rate) / ((four ? 64.0 : 8.0) * omega_h * omega_h * omega_h);
+  const double missed = std::max(0.0, residual_band_variance_[four ? 1 : 0] - noise);
   const double broadband = out.position_variance + std::max(low_variance_, low_.back() * low_.back());
   double target = missed > 0.0 ? missed / (missed + broadband) : 0.0;
   // The residual sees only the wave band: bias wander below it never opens the share. But a model

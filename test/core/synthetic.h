@@ -6,6 +6,7 @@
 #include <random>
 #include <vector>
 
+#include "../common/random_vector.h"
 #include "periodic_bias_compensation/core/compensator.h"
 
 namespace periodic_bias_compensation
@@ -55,7 +56,7 @@ inline ShakeRecord makeShake(const Shake& shake)
       acceleration[i] = shake.amplitude[i] * (-w * w * std::sin(phi) + dw * std::cos(phi));
     }
     s.specific_force = acceleration + Vector3(0, 0, kStandardGravity) + shake.bias +
-                       sigma * Vector3(normal(rng), normal(rng), normal(rng));
+                       sigma * test::drawVector([&] { return normal(rng); });
     s.has_orientation = shake.with_orientation;
     record.samples.push_back(s);
     record.position.push_back(position);

@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include "../common/random_vector.h"
 #include "periodic_bias_compensation/core/compensator.h"
 #include "periodic_bias_compensation/core/gyro_attitude.h"
 
@@ -159,7 +160,7 @@ TEST(GyroAttitude, AStartAtRestTakesTheGyroBiasFromIt)
   double worst = 0.0;
   for (int k = 0; k <= static_cast<int>(60.0 * kRate); ++k)
   {
-    const Vector3 rate = bias + Vector3(noise(rng), noise(rng), noise(rng));
+    const Vector3 rate = bias + pbc::test::drawVector([&] { return noise(rng); });
     const Vector3 force = tilt.conjugate() * Vector3(0, 0, pbc::kStandardGravity) + 0.01 * Vector3(noise(rng), 0, 0);
     at_rest.update(rate, force, k == 0 ? 0.0 : 1.0 / kRate);
     if (at_rest.initialised())
@@ -202,9 +203,9 @@ TEST(GyroAttitude, AtRestTheGyroIsNotIntegrated)
   {
     const double t = k / kRate;
     const Vector3 wander = 5e-4 * Vector3(std::sin(2.0 * M_PI * t / 60.0), std::cos(2.0 * M_PI * t / 90.0), 0.0);
-    const Vector3 rate = bias + wander + 0.006 * Vector3(normal(rng), normal(rng), normal(rng));
-    const Vector3 force =
-        tilt.conjugate() * Vector3(0, 0, pbc::kStandardGravity) + 0.04 * Vector3(normal(rng), normal(rng), normal(rng));
+    const Vector3 rate = bias + wander + 0.006 * pbc::test::drawVector([&] { return normal(rng); });
+    const Vector3 force = tilt.conjugate() * Vector3(0, 0, pbc::kStandardGravity) +
+                          0.04 * pbc::test::drawVector([&] { return normal(rng); });
     attitude.update(rate, force, k == 0 ? 0.0 : 1.0 / kRate);
     if (t >= 60.0)
     {
@@ -223,7 +224,7 @@ TEST(GyroAttitude, AtRestTheGyroIsNotIntegrated)
   for (int k = 1; k <= static_cast<int>(2.0 * kRate); ++k)
   {
     truth = truth * Quaternion(Eigen::AngleAxisd(0.1 / kRate, Vector3::UnitX()));
-    const Vector3 rate = bias + Vector3(0.1, 0, 0) + 0.006 * Vector3(normal(rng), normal(rng), normal(rng));
+    const Vector3 rate = bias + Vector3(0.1, 0, 0) + 0.006 * pbc::test::drawVector([&] { return normal(rng); });
     attitude.update(rate, truth.conjugate() * Vector3(0, 0, pbc::kStandardGravity), 1.0 / kRate);
   }
   EXPECT_FALSE(attitude.quiet());

@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "../common/random_vector.h"
 #include "../common/test_size.h"
 #include "periodic_bias_compensation/core/compensator.h"
 
@@ -102,7 +103,7 @@ Outcome run(const Stream& stream, const pbc::CompensatorConfig& config = pbc::Co
     ImuSample s;
     s.t = 1.7e9 + t;
     s.specific_force = acceleration + Vector3(0, 0, stream.gravity) + stream.bias + walk + drift +
-                       sigma * Vector3(normal(rng), normal(rng), normal(rng));
+                       sigma * pbc::test::drawVector([&] { return normal(rng); });
     s.has_orientation = true;
     CompensatorOutput out;
     if (!pbc::producedOutput(compensator.addSample(s, &out)))
@@ -129,7 +130,7 @@ Stream lowCostSensor(unsigned seed, std::mt19937_64& rng)
   Stream s;
   s.seed = seed;
   s.noise_density = 0.002 + 0.004 * u(rng);
-  s.bias = Vector3(0.16 * u(rng) - 0.08, 0.16 * u(rng) - 0.08, 0.16 * u(rng) - 0.08);
+  s.bias = pbc::test::drawVector([&] { return 0.16 * u(rng) - 0.08; });
   return s;
 }
 
@@ -233,8 +234,8 @@ TEST(RealWorldStreams, StampJitterChangesNothing)
       sample.t = 100.0 + (k + stamp(stamp_rng)) / s.rate;
       Vector3 a = Vector3::Zero();
       a[s.shaken_axis] = -w * w * s.amplitude * std::sin(w * t);
-      sample.specific_force =
-          a + Vector3(0, 0, pbc::kStandardGravity) + s.bias + sigma * Vector3(normal(rng), normal(rng), normal(rng));
+      sample.specific_force = a + Vector3(0, 0, pbc::kStandardGravity) + s.bias +
+                              sigma * pbc::test::drawVector([&] { return normal(rng); });
       sample.has_orientation = true;
       EXPECT_TRUE(pbc::producedOutput(c.addSample(sample, &out)));
       if (t >= 20.0)
@@ -401,7 +402,7 @@ double mooredHeaveError(unsigned seed, double random_walk, double duration)
     ImuSample s;
     s.t = 100.0 + t;
     s.specific_force = Vector3(0, 0, az + pbc::kStandardGravity) + Vector3(0.03, -0.02, 0.05) + walk +
-                       sigma * Vector3(normal(rng), normal(rng), normal(rng));
+                       sigma * pbc::test::drawVector([&] { return normal(rng); });
     s.has_orientation = true;
     CompensatorOutput out;
     if (pbc::producedOutput(compensator.addSample(s, &out)) && t >= 20.0)
@@ -487,7 +488,7 @@ std::array<double, 2> mooredSurgeSwayError(unsigned seed, double random_walk, co
     ImuSample s;
     s.t = 100.0 + t;
     s.specific_force = acceleration + Vector3(0, 0, pbc::kStandardGravity) + Vector3(0.03, -0.02, 0.05) + walk +
-                       noise * Vector3(normal(rng), normal(rng), normal(rng));
+                       noise * pbc::test::drawVector([&] { return normal(rng); });
     s.has_orientation = true;
     CompensatorOutput out;
     if (pbc::producedOutput(compensator.addSample(s, &out)) && t >= 120.0)
@@ -633,7 +634,7 @@ HullErrors mooredHullWithLeverArm(unsigned seed, const Vector3& configured_lever
     ImuSample s;
     s.t = 100.0 + t;
     s.specific_force = q[1].conjugate() * (imu_acceleration + Vector3(0, 0, pbc::kStandardGravity)) +
-                       Vector3(0.03, -0.02, 0.05) + walk + noise * Vector3(normal(rng), normal(rng), normal(rng));
+                       Vector3(0.03, -0.02, 0.05) + walk + noise * pbc::test::drawVector([&] { return normal(rng); });
     s.angular_rate = step.axis() * step.angle() / h;
     s.has_orientation = true;
     s.orientation = q[1];

@@ -23,6 +23,7 @@
 
 #include <gtest/gtest.h>
 
+#include "../common/random_vector.h"
 #include "periodic_bias_compensation/core/compensator.h"
 #include "periodic_bias_compensation/sim/scenario.h"
 #include "periodic_bias_compensation/sim/simulator.h"
@@ -317,7 +318,7 @@ TEST(Reliability, ConstantAndNoiseInputNeverLockAPeriod)
       if (kind >= 1)
       {
         const double sigma = kind == 1 ? 0.003 : (kind == 2 ? 0.05 : 0.5);
-        s.specific_force += sigma * pbc::Vector3(normal(rng), normal(rng), normal(rng));
+        s.specific_force += sigma * pbc::test::drawVector([&] { return normal(rng); });
       }
       s.has_orientation = true;
       CompensatorOutput out;

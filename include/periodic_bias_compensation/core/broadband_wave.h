@@ -8,10 +8,13 @@
 // are blended by inverse variance:
 //  - what the harmonic model misses is measured where bias wander is not: its residual
 //    acceleration above min_frequency (two first-order high-passes, only against a locked
-//    model), integrated by a second HeaveFilter, its variance less that of the white noise
-//    through both; once that opens the share, the larger of it and what the difference of the
-//    two displacements says (its variance less the broadband error: a model locked elsewhere
-//    fits the acceleration yet gives the wrong displacement);
+//    model; on the vertical axis four until the first spectral design, while the fixed filter
+//    stands in: it carries everything below the band, and a bias drifting over a minute leaks
+//    through two high-passes as centimetres said to be missed), integrated by a second
+//    HeaveFilter, its variance less that of the white noise through both; once that opens the
+//    share, the larger of it and what the difference of the two displacements says (its
+//    variance less the broadband error: a model locked elsewhere fits the acceleration yet
+//    gives the wrong displacement);
 //  - the broadband error is its own (the noise through the fixed filter, or the Wiener design's
 //    expected error) plus its output below the wave band (two first-order low-passes at half
 //    min_frequency), as averaged or as it is now, whichever is larger (bias wander grows faster
@@ -98,9 +101,10 @@ private:
   double min_frequency_;
   HeaveFilter fixed_;
   WienerHeave spectral_;
-  std::array<HighPass, 2> residual_high_{};  ///< the harmonic model's residual above the band edge
-  HeaveFilter residual_heave_;               ///< the residual's displacement
-  double residual_band_variance_ = 0.0;
+  /// The harmonic model's residual above the band edge, through two and through four high-passes.
+  std::array<HighPass, 4> residual_high_{};
+  std::array<HeaveFilter, 2> residual_heave_;  ///< the residual's displacement, each way
+  std::array<double, 2> residual_band_variance_{};
   double difference_variance_ = 0.0;  ///< of harmonic less broadband displacement, since the lock
   double residual_samples_ = 0.0;     ///< in residual_band_variance_ since the lock
   double samples_ = 0.0;              ///< in noise_variance_ and low_variance_

@@ -77,6 +77,11 @@ public:
   /// acceleration squared, one-sided [(m/s^2)^2/Hz], used at the next design.
   WienerHeaveOutput update(double a, double dt, double noise_density_squared);
 
+  /// A design has been made since the last reset() (it may be stale after restartRecord()).
+  bool designed() const
+  {
+    return current_ != nullptr;
+  }
   /// The design rate's spacing in samples (0 before the first sample).
   int decimation() const
   {
