@@ -4,6 +4,8 @@
 #include <cmath>
 #include <limits>
 
+#include "periodic_bias_compensation/core/types.h"
+
 namespace periodic_bias_compensation
 {
 namespace
@@ -11,7 +13,6 @@ namespace
 /// Specific force whose magnitude departs from 1 g by more than this share is not taken as the
 /// gravity direction (a slam, a crane lift) [-].
 constexpr double kMaxForceDeparture = 0.3;
-constexpr double kGravity = 9.80665;
 /// Shortest time constant of the tilt pull, used right after initialisation [s].
 constexpr double kStartTimeConstant = 1.0;
 /// Largest share of the tilt error corrected in one step (keeps the explicit step stable for
@@ -55,7 +56,7 @@ const Eigen::Quaterniond& GyroAttitude::update(const Eigen::Vector3d& angular_ra
                                                const Eigen::Vector3d& specific_force, double dt)
 {
   const double force = specific_force.norm();
-  const bool gravity_like = std::abs(force - kGravity) < kMaxForceDeparture * kGravity;
+  const bool gravity_like = std::abs(force - kStandardGravity) < kMaxForceDeparture * kStandardGravity;
   if (!initialised_)
   {
     start(angular_rate, specific_force, dt, gravity_like);

@@ -17,14 +17,16 @@ namespace
 constexpr std::size_t kMinDataLines = 200;
 const std::array<const char*, 6> kImuKeys = { "ax", "ay", "az", "gx", "gy", "gz" };
 const std::array<const char*, 7> kTruthKeys = { "px", "py", "pz", "qw", "qx", "qy", "qz" };
-const char* const kValidKeys = "t, ax, ay, az, gx, gy, gz, temp, px, py, pz, qw, qx, qy, qz";
+const std::array<const char*, 3> kAngleKeys = { "roll", "pitch", "yaw" };
+const char* const kValidKeys = "t, ax, ay, az, gx, gy, gz, temp, px, py, pz, qw, qx, qy, qz, roll, pitch, yaw";
 
 bool validKey(const std::string& key)
 {
   if (key == "t" || key == "temp")
     return true;
   const auto is = [&key](const char* k) { return key == k; };
-  return std::any_of(kImuKeys.begin(), kImuKeys.end(), is) || std::any_of(kTruthKeys.begin(), kTruthKeys.end(), is);
+  return std::any_of(kImuKeys.begin(), kImuKeys.end(), is) || std::any_of(kTruthKeys.begin(), kTruthKeys.end(), is) ||
+         std::any_of(kAngleKeys.begin(), kAngleKeys.end(), is);
 }
 
 std::string trim(const std::string& s)
@@ -123,6 +125,10 @@ std::map<std::string, Column> parseColumns(const CsvOptions& o, const std::vecto
       std::count_if(kTruthKeys.begin(), kTruthKeys.end(), [&](const char* k) { return columns.count(k) > 0; });
   if (truth != 0 && truth != static_cast<long>(kTruthKeys.size()))
     throw CsvOptionError("--columns: truth needs all of px,py,pz,qw,qx,qy,qz");
+  const auto angles =
+      std::count_if(kAngleKeys.begin(), kAngleKeys.end(), [&](const char* k) { return columns.count(k) > 0; });
+  if (angles != 0 && angles != static_cast<long>(kAngleKeys.size()))
+    throw CsvOptionError("--columns: the orientation needs all of roll,pitch,yaw");
   return columns;
 }
 
@@ -178,6 +184,8 @@ Recording readCsv(const CsvOptions& o)
   std::ifstream in(o.path);
   if (!in)
     throw std::runtime_error("cannot read " + o.path);
+  Recording r;
+  r.source = o.path;
   std::string line;
   for (int i = 0; i < o.skip_lines && std::getline(in, line); ++i)
   {
@@ -192,9 +200,14 @@ Recording readCsv(const CsvOptions& o)
     return c.sign * std::stod(fields.at(c.index));
   };
   const bool has_truth = has("px") && o.use_truth;
+  r.has_orientation = has("roll");
+  // x forward, y left, z up from x forward, y right, z down; ENU from NED.
+  const Eigen::Vector3d flip = o.ned ? Eigen::Vector3d(1.0, -1.0, -1.0) : Eigen::Vector3d::Ones();
+  const Eigen::Quaterniond down_up(Eigen::AngleAxisd(o.ned ? M_PI : 0.0, Eigen::Vector3d::UnitX()));
+  const Eigen::Quaterniond enu_ned =
+      o.ned ? Eigen::Quaterniond(Eigen::Matrix3d((Eigen::Matrix3d() << 0, 1, 0, 1, 0, 0, 0, 0, -1).finished()))
+            : Eigen::Quaterniond::Identity();
 
-  Recording r;
-  r.source = o.path;
   std::vector<std::array<double, 6>> rows;
   std::size_t k = 0;
   while (std::getline(in, line))
@@ -204,11 +217,22 @@ Recording readCsv(const CsvOptions& o)
     {
       std::array<double, 6> v;
       for (int c = 0; c < 6; ++c)
-        v[c] = value(fields, kImuKeys[c]) * (c < 3 ? o.accel_scale : o.gyro_scale);
+        v[c] = value(fields, kImuKeys[c]) * (c < 3 ? o.accel_scale : o.gyro_scale) * flip[c % 3];
       const double t = has("t") ? value(fields, "t") * o.time_scale : k / o.rate;
       const double temperature = has("temp") ? value(fields, "temp") : 0.0;
       if (!std::isfinite(t) || !std::all_of(v.begin(), v.end(), [](double a) { return std::isfinite(a); }))
         continue;
+      Eigen::Quaterniond reported = Eigen::Quaterniond::Identity();
+      if (r.has_orientation)
+      {
+        const double roll = value(fields, "roll"), pitch = value(fields, "pitch"), yaw = value(fields, "yaw");
+        if (!std::isfinite(roll + pitch + yaw))
+          continue;
+        const Eigen::Quaterniond world_sensor = Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()) *
+                                                Eigen::AngleAxisd(pitch, Eigen::Vector3d::UnitY()) *
+                                                Eigen::AngleAxisd(roll, Eigen::Vector3d::UnitX());
+        reported = (enu_ned * world_sensor * down_up).normalized();
+      }
       if (has_truth)
       {
         double q[7];
@@ -221,7 +245,10 @@ Recording readCsv(const CsvOptions& o)
         r.truth.position.emplace_back(q[0], q[1], q[2]);
         r.truth.orientation.push_back(orientation.normalized());
       }
+
       rows.push_back(v);
+      if (r.has_orientation)
+        r.orientation.push_back(reported);
       r.stamp.push_back(t);
       r.temperature.push_back(temperature);
       ++k;

@@ -266,14 +266,15 @@ void motionStage(DiagnoseContext* context, BaseEnsemble* base, Report* rep)
     return out;
   };
   const MotionSummary real = summariseMotion(context->real);
-  std::vector<MotionSummary> best_summaries = summaries(base->runs);
-  rep->motion = fitMotion(real, context->scenario, best_summaries);
+  // The adopted ensemble's summaries; none while they are to be made from best_runs.
+  std::optional<std::vector<MotionSummary>> best_summaries = summaries(base->runs);
+  rep->motion = fitMotion(real, context->scenario, *best_summaries);
   if (!rep->motion.differs)
   {
     // With the tilt, heading and sea state as the scenario's, only a rotation's response says the
     // motion differs: surge and sway differences are left to the accelerometer's effects.
     std::vector<std::string> unused;
-    if (!fitWaveResponses(real, context->scenario, best_summaries, &unused, true))
+    if (!fitWaveResponses(real, context->scenario, *best_summaries, &unused, true))
     {
       return;
     }
@@ -294,13 +295,13 @@ void motionStage(DiagnoseContext* context, BaseEnsemble* base, Report* rep)
       rep->motion.adopted = candidate.what;
       rep->motion.fitted = candidate.scenario;
       best_runs = std::move(runs);
-      best_summaries.clear();  // summarised when needed
+      best_summaries.reset();  // summarised when needed
     }
   };
   const auto adopted_summaries = [&]() -> const std::vector<MotionSummary>& {
-    if (best_summaries.empty())
+    if (!best_summaries)
       best_summaries = summaries(best_runs);
-    return best_summaries;
+    return *best_summaries;
   };
   for (const MotionCandidate& candidate : rep->motion.candidates)
   {

@@ -5,13 +5,15 @@
 //                [--truth-topic ground_truth/odometry] [--temperature-topic imu/temperature]
 //   diagnose_gap --real-csv FILE --columns t=COL,ax=COL,ay=COL,az=COL,gx=COL,gy=COL,gz=COL
 //                [--accel-scale K] [--gyro-scale K] [--time-scale K] [--rate HZ] [--skip-lines N]
-//                --sim SCENARIO.yaml --out DIR
+//                [--ned] --sim SCENARIO.yaml --out DIR
 //   common: [--ensemble N] [--fit-fraction F] [--threads N] [--no-plots] [--max-duration S]
 //           [--truth-smooth S] [--no-truth]
 //
 // Truth: in a bag, nav_msgs/Odometry on --truth-topic (used when present; an explicit
 // --truth-topic without messages is an error); in a CSV, columns px,py,pz (world, z up, times
-// --truth-position-scale) and qw,qx,qy,qz (body -> world). The report then compares real minus
+// --truth-position-scale) and qw,qx,qy,qz (body -> world). A CSV's columns roll,pitch,yaw are the
+// sensor's reported orientation (z-y-x angles [rad]); --ned: the file's axes are x forward, y right,
+// z down and its angles against north-east-down (turned into REP-103/REP-145 on reading). The report then compares real minus
 // the ideal IMU driven by that truth with the same residual of every simulated run.
 // COL is a column name of the CSV header or a 0-based index, optionally prefixed with '-' to
 // negate it; without a t column the time is k / rate. Scales convert to SI (e.g. --accel-scale
@@ -62,7 +64,7 @@ const char* const kUsage =
     "usage: diagnose_gap (--real REAL.bag | --real-csv FILE --columns t=C,ax=C,...,gz=C) --sim SCENARIO.yaml --out "
     "DIR\n"
     "         [--imu-topic imu/data] [--truth-topic ground_truth/odometry] [--temperature-topic imu/temperature]\n"
-    "         [--accel-scale K] [--gyro-scale K] [--time-scale K] [--rate HZ] [--skip-lines N]\n"
+    "         [--accel-scale K] [--gyro-scale K] [--time-scale K] [--rate HZ] [--skip-lines N] [--ned]\n"
     "         [--ensemble N] [--fit-fraction F] [--threads N] [--max-duration S] [--steps N] [--no-plots]\n"
     "         [--truth-smooth S] [--no-truth] [--truth-position-scale K] (CSV truth columns px,py,pz,qw,qx,qy,qz)\n";
 
@@ -84,6 +86,7 @@ struct Options
   std::string temperature_topic = "imu/temperature";
   double accel_scale = 1.0, gyro_scale = 1.0, time_scale = 1.0, rate = 0.0, max_duration = 0.0;
   int skip_lines = 0;
+  bool ned = false;
   int steps = 5;
   bool plots = true;
   gap::DiagnoseOptions diag;
@@ -221,6 +224,7 @@ gap::Recording readCsv(const Options& o)
   csv.truth_position_scale = o.truth_position_scale;
   csv.rate = o.rate;
   csv.use_truth = o.use_truth;
+  csv.ned = o.ned;
   return gap::readCsv(csv);
 }
 
@@ -418,6 +422,7 @@ std::optional<Options> parse(int argc, char** argv)
       .number("--time-scale", &o.time_scale)
       .number("--rate", &o.rate)
       .integer("--skip-lines", &o.skip_lines)
+      .flag("--ned", &o.ned, true)
       .integer("--ensemble", &o.diag.ensemble)
       .number("--fit-fraction", &o.diag.fit_fraction)
       .integer("--threads", &o.diag.threads)

@@ -16,7 +16,6 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <fstream>
 #include <iostream>
 #include <map>
 #include <optional>
@@ -27,6 +26,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "periodic_bias_compensation/gap/csv.h"
 #include "periodic_bias_compensation/gap/gap.h"
 #include "periodic_bias_compensation/sim/effects.h"
 #include "periodic_bias_compensation/sim/scenario.h"
@@ -329,7 +329,7 @@ double jonswapDensity(double f, double fp)
 /// (z-y-x), all derivatives analytic.
 void hullMotion(std::uint64_t seed, gap::Recording* r)
 {
-  constexpr double kTwoPi = 2.0 * M_PI, kG = 9.80665;
+  constexpr double kTwoPi = 2.0 * M_PI, kG = sim::kStandardGravity;
   std::mt19937_64 rng(seed * 2654435761ULL + 99);
   std::uniform_real_distribution<double> u(0.0, 1.0);
   const double hs = 1.5 + u(rng), fp = 1.0 / (7.0 + 4.0 * u(rng));
@@ -471,85 +471,31 @@ gap::Recording foreignRecording(const sim::Scenario& base, const std::string& ef
 }
 
 /// The moored buoy's recording (MicroStrain 3DM-GX3, 10 Hz, with its own AHRS; ../shared/data/
-/// buoy_morro_bay): stamps from GPS time of week, specific force and rate turned from its z-down
-/// frame into a z-up one (180 degrees about x), and its NED roll, pitch, yaw (z-y-x) as the
-/// reported sensor -> ENU orientation.
+/// buoy_morro_bay): stamps from GPS time of week (from 0), specific force in g and rate in its
+/// z-down frame, its NED roll, pitch and yaw as the reported orientation (gap::CsvOptions::ned).
 /// @throws std::runtime_error when the file cannot be read or lacks a column
 gap::Recording readBuoy(const std::string& path)
 {
-  std::ifstream in(path);
-  std::string line;
-  if (!in || !std::getline(in, line))
-  {
-    throw std::runtime_error("--buoy: cannot read " + path);
-  }
-  std::map<std::string, std::size_t> column;
-  {
-    std::stringstream header(line);
-    std::string name;
-    for (std::size_t i = 0; std::getline(header, name, ','); ++i)
-    {
-      column[name] = i;
-    }
-  }
-  const std::vector<std::string> wanted = { "gps_tow_s",    "accel_x_g",    "accel_y_g", "accel_z_g", "gyro_x_rad_s",
-                                            "gyro_y_rad_s", "gyro_z_rad_s", "roll_rad",  "pitch_rad", "yaw_rad" };
-  std::vector<std::size_t> index;
-  for (const auto& w : wanted)
-  {
-    if (column.count(w) == 0)
-    {
-      throw std::runtime_error("--buoy: " + path + " has no column " + w);
-    }
-    index.push_back(column.at(w));
-  }
-  constexpr double kG = 9.80665;
-  const Eigen::Vector3d flip(1.0, -1.0, -1.0);
-  // ENU from NED, and the z-up body from the z-down one
-  const Eigen::Quaterniond enu_ned(Eigen::Matrix3d((Eigen::Matrix3d() << 0, 1, 0, 1, 0, 0, 0, 0, -1).finished()));
-  const Eigen::Quaterniond down_up(Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitX()));
-  std::vector<std::array<double, 10>> rows;
-  while (std::getline(in, line))
-  {
-    std::vector<std::string> fields;
-    std::stringstream ss(line);
-    for (std::string f; std::getline(ss, f, ',');)
-    {
-      fields.push_back(f);
-    }
-    std::array<double, 10> v{};
-    bool ok = true;
-    for (std::size_t j = 0; j < index.size() && ok; ++j)
-    {
-      char* end = nullptr;
-      ok = index[j] < fields.size();
-      v[j] = ok ? std::strtod(fields[index[j]].c_str(), &end) : 0.0;
-      ok = ok && end != fields[index[j]].c_str() && std::isfinite(v[j]);
-    }
-    if (ok)
-    {
-      rows.push_back(v);
-    }
-  }
-  if (rows.size() < 200)
-  {
-    throw std::runtime_error("--buoy: " + path + ": only " + std::to_string(rows.size()) + " data lines");
-  }
+  gap::CsvOptions csv;
+  csv.path = path;
+  csv.columns =
+      "t=gps_tow_s,ax=accel_x_g,ay=accel_y_g,az=accel_z_g,gx=gyro_x_rad_s,gy=gyro_y_rad_s,gz=gyro_z_rad_s,"
+      "roll=roll_rad,pitch=pitch_rad,yaw=yaw_rad";
+  csv.accel_scale = sim::kStandardGravity;
+  csv.ned = true;
   gap::Recording r;
-  r.source = path;
-  r.has_orientation = true;
-  r.data.resize(static_cast<Eigen::Index>(rows.size()), gap::kChannels);
-  for (std::size_t i = 0; i < rows.size(); ++i)
+  try
   {
-    const auto& v = rows[i];
-    r.stamp.push_back(v[0] - rows[0][0]);
-    const Eigen::Index row = static_cast<Eigen::Index>(i);
-    r.data.row(row).head<3>() = (Eigen::Vector3d(v[1], v[2], v[3]) * kG).cwiseProduct(flip).transpose();
-    r.data.row(row).tail<3>() = Eigen::Vector3d(v[4], v[5], v[6]).cwiseProduct(flip).transpose();
-    const Eigen::Quaterniond ned_frd = Eigen::AngleAxisd(v[9], Eigen::Vector3d::UnitZ()) *
-                                       Eigen::AngleAxisd(v[8], Eigen::Vector3d::UnitY()) *
-                                       Eigen::AngleAxisd(v[7], Eigen::Vector3d::UnitX());
-    r.orientation.push_back((enu_ned * ned_frd * down_up).normalized());
+    r = gap::readCsv(csv);
+  }
+  catch (const std::exception& e)
+  {
+    throw std::runtime_error(std::string("--buoy: ") + e.what());
+  }
+  const double start = r.stamp.front();
+  for (double& t : r.stamp)
+  {
+    t -= start;
   }
   r.rate = gap::estimateRate(r);
   return r;
@@ -701,28 +647,36 @@ bool isHull(const std::string& motion)
   return motion.rfind("hull", 0) == 0;
 }
 
-/// The (effect, size) cases of a motion, those without a withheld effect last: in the small form
-/// only vibration on the motions written outside the simulator; one case without an effect on a
-/// replayed recording, two otherwise.
-std::vector<std::pair<std::string, double>> motionCases(const std::string& motion, bool small,
-                                                        const std::vector<double>& sizes)
+/// One effect at one size, run on `seeds` seeds.
+struct MotionCase
 {
-  const bool outside = isForeign(motion) || motion == "buoy-replay";
-  std::vector<std::pair<std::string, double>> cases;
+  std::string effect;
+  double size = 0.0;
+  int seeds = 1;
+};
+
+/// The cases of a motion, those without a withheld effect last: in the small form only vibration
+/// on the motions written outside the simulator. A replayed recording as it is, without an effect,
+/// is the same whatever the seed: one case on one seed; two cases on every seed otherwise.
+std::vector<MotionCase> motionCases(const std::string& motion, bool small, const std::vector<double>& sizes, int seeds)
+{
+  const bool replay = motion == "buoy-replay";
+  const bool outside = isForeign(motion) || replay;
+  std::vector<MotionCase> cases;
   for (const auto& e : isForeign(motion) ? foreignEffects() : simulatorEffects())
   {
     for (double k : sizes)
     {
       if (!(outside && small && e != "vibration"))
       {
-        cases.push_back({ e, k });
+        cases.push_back({ e, k, seeds });
       }
     }
   }
-  cases.push_back({ "none", 0.0 });
-  if (!small && motion != "buoy-replay")
+  cases.push_back({ "none", 0.0, replay ? 1 : seeds });
+  if (!small && !replay)
   {
-    cases.push_back({ "none", 0.0 });
+    cases.push_back({ "none", 0.0, seeds });
   }
   return cases;
 }
@@ -886,18 +840,14 @@ std::vector<CaseResult> runCases(const Options& opt, const Grid& grid)
     {
       base = baseScenario(foreign ? motion.substr(0, motion.size() - 8) : motion, opt.rate, opt.duration);
     }
-    for (const auto& [effect, k] : motionCases(motion, opt.small, grid.sizes))
+    for (const auto& [effect, k, seeds] : motionCases(motion, opt.small, grid.sizes, grid.seeds))
     {
       if (!opt.only_effect.empty() && effect != opt.only_effect)
       {
         continue;
       }
-      for (int sd = 0; sd < grid.seeds; ++sd)
+      for (int sd = 0; sd < seeds; ++sd)
       {
-        if (motion == "buoy-replay" && effect == "none" && sd > 0)
-        {
-          break;  // the recording as it is: the same case whatever the seed
-        }
         ++case_index;
         const Case c = { motion, effect, k, static_cast<std::uint64_t>(5000 + 37 * sd + case_index) };
         const CaseResult cr = runCase(c, base, motion == "buoy-replay" ? &*buoy : nullptr, opt.verbose);

@@ -125,3 +125,52 @@ TEST(GapCsv, UnitsAreCheckedAgainstGravityAndTheStamps)
   ms.time_scale = 1e-3;
   EXPECT_NEAR(gap::estimateRate(gap::readCsv(ms)), 100.0, 1e-6);
 }
+
+/// A sensor at rest, tilted and turned, written as NED/FRD files commonly are: specific force and
+/// rate on x forward, y right, z down, and roll, pitch, yaw against north-east-down.
+TEST(GapCsv, NedFilesAreReadIntoEnuWithTheirOrientation)
+{
+  const double roll = 0.1, pitch = -0.05, yaw = 2.0, g = 9.81;
+  // The force at rest points up: (0, 0, -g) in NED. Its FRD components, rotating the world
+  // vector back through yaw, pitch, roll in turn.
+  const double cr = std::cos(roll), sr = std::sin(roll), cp = std::cos(pitch), sp = std::sin(pitch);
+  const double fx = g * sp, fy = -g * sr * cp, fz = -g * cr * cp;
+  const std::string path = ::testing::TempDir() + "ned.csv";
+  {
+    std::ofstream out(path);
+    out.precision(17);
+    out << "t,fx,fy,fz,wx,wy,wz,r,p,y\n";
+    for (int k = 0; k < 300; ++k)
+      out << 0.01 * k << "," << fx << "," << fy << "," << fz << ",0.01,0.02,0.03," << roll << "," << pitch << "," << yaw
+          << "\n";
+  }
+  gap::CsvOptions o = options(path, "t=t,ax=fx,ay=fy,az=fz,gx=wx,gy=wy,gz=wz,roll=r,pitch=p,yaw=y");
+  o.ned = true;
+  const gap::Recording r = gap::readCsv(o);
+  ASSERT_TRUE(r.has_orientation);
+  ASSERT_EQ(r.orientation.size(), r.size());
+  // The gyro in x forward, y left, z up.
+  EXPECT_NEAR(r.data(0, 3), 0.01, 1e-12);
+  EXPECT_NEAR(r.data(0, 4), -0.02, 1e-12);
+  EXPECT_NEAR(r.data(0, 5), -0.03, 1e-12);
+  // The reported orientation takes the force to ENU's up, and the bow to its heading: yaw from
+  // north clockwise, pitch positive bow up.
+  const Eigen::Vector3d up = r.orientation[0] * r.data.row(0).head<3>().transpose();
+  EXPECT_NEAR(up.x(), 0.0, 1e-9);
+  EXPECT_NEAR(up.y(), 0.0, 1e-9);
+  EXPECT_NEAR(up.z(), g, 1e-9);
+  const Eigen::Vector3d bow = r.orientation[0] * Eigen::Vector3d::UnitX();
+  EXPECT_NEAR(bow.x(), std::sin(yaw) * cp, 1e-9);
+  EXPECT_NEAR(bow.y(), std::cos(yaw) * cp, 1e-9);
+  EXPECT_NEAR(bow.z(), std::sin(pitch), 1e-9);
+
+  // Without ned the angles are ENU z-y-x of a z-up sensor.
+  gap::CsvOptions enu = options(writeCsv("angles.csv", ","), "t=0,ax=1,ay=2,az=3,gx=4,gy=5,gz=6,roll=5,pitch=5,yaw=4");
+  const gap::Recording e = gap::readCsv(enu);
+  ASSERT_TRUE(e.has_orientation);
+  EXPECT_NEAR(e.orientation[0].w(), 1.0, 1e-9);  // every angle 0 in the first row
+  // All three angles or none.
+  const std::string partial = messageOf<gap::CsvOptionError>(
+      [&] { gap::readCsv(options(path, "t=t,ax=fx,ay=fy,az=fz,gx=wx,gy=wy,gz=wz,roll=r,pitch=p")); });
+  EXPECT_NE(partial.find("roll,pitch,yaw"), std::string::npos) << partial;
+}

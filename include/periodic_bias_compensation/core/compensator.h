@@ -22,9 +22,6 @@
 
 namespace periodic_bias_compensation
 {
-/// Standard gravity [m/s^2] (REP-103: ENU, z up; a sensor at rest reads +g on its up axis).
-constexpr double kStandardGravity = 9.80665;
-
 /// Largest specific force accepted per axis [m/s^2] (about 200 g: above any accelerometer fitted
 /// on a ship). A finite value beyond it is a driver glitch, not a measurement: integrated, it
 /// would overflow the estimator state.

@@ -7,4 +7,7 @@ namespace periodic_bias_compensation
 {
 using Vector3 = Eigen::Vector3d;
 using Quaternion = Eigen::Quaterniond;
+
+/// Standard gravity [m/s^2] (REP-103: ENU, z up; a sensor at rest reads +g on its up axis).
+constexpr double kStandardGravity = 9.80665;
 }  // namespace periodic_bias_compensation

@@ -13,8 +13,9 @@ struct CsvOptions
 {
   std::string path;
   /// key=COLUMN pairs, comma-separated. Keys: t; ax, ay, az; gx, gy, gz (required); temp; px, py,
-  /// pz, qw, qx, qy, qz (truth: all or none). COLUMN is a header name or a 0-based index,
-  /// optionally prefixed with '-' to negate it.
+  /// pz, qw, qx, qy, qz (truth: all or none); roll, pitch, yaw (the sensor's reported orientation
+  /// as z-y-x angles against the world [rad]: all or none). COLUMN is a header name or a 0-based
+  /// index, optionally prefixed with '-' to negate it.
   std::string columns;
   int skip_lines = 0;                 ///< lines before the header
   double accel_scale = 1.0;           ///< to m/s^2 (9.80665 for g)
@@ -23,6 +24,10 @@ struct CsvOptions
   double truth_position_scale = 1.0;  ///< to m
   double rate = 0.0;                  ///< [Hz]; without a t column the time is k / rate
   bool use_truth = true;              ///< read the truth columns when given
+  /// The sensor's axes are x forward, y right, z down and its angles are against north-east-down
+  /// (the usual marine convention): specific force and rate are turned into x forward, y left,
+  /// z up (180 degrees about x), the orientation into sensor -> ENU (REP-103, REP-145).
+  bool ned = false;
 };
 
 /// A mistake in CsvOptions::columns or rate (an unknown key, a column the file does not have):

@@ -10,14 +10,15 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
+#include "periodic_bias_compensation/core/types.h"
+
 namespace periodic_bias_compensation::sim
 {
 using Vector3 = Eigen::Vector3d;
 using Matrix3 = Eigen::Matrix3d;
 using Quaternion = Eigen::Quaterniond;
 
-/// Standard gravity [m/s^2].
-constexpr double kStandardGravity = 9.80665;
+using periodic_bias_compensation::kStandardGravity;
 
 /// Exact motion of the reference point base_link. Vectors in ENU unless stated otherwise.
 struct Truth
