@@ -54,6 +54,9 @@ BroadbandWaveOutput BroadbandWave::update(const BroadbandWaveInput& in)
   if (dt > 0.0)
     spectral_share_ +=
         (1.0 - std::exp(-dt / WienerHeave::kDesignFade)) * ((spectral.valid ? 1.0 : 0.0) - spectral_share_);
+  // The vertical axis measures what the harmonic model misses through four high-passes until the
+  // first design (designed() stays true until reset()), every axis through two after it.
+  const bool four_passes = vertical_ && !spectral_.designed();
   out.position_variance = fixed_.positionVariance(density);
   out.velocity_variance = fixed_.velocityVariance(density);
   if (spectral_share_ > 0.0)
@@ -82,27 +85,24 @@ BroadbandWaveOutput BroadbandWave::update(const BroadbandWaveInput& in)
     if (in.locked)
     {
       const double high = std::exp(-dt * 2.0 * M_PI * min_frequency_);
-      double band = in.residual;
-      std::array<double, 2> bands{};
-      for (std::size_t s = 0; s < residual_high_.size(); ++s)
-      {
-        HighPass& stage = residual_high_[s];
-        stage.output = residual_samples_ > 0.0 ? high * (stage.output + band - stage.input) : 0.0;
-        stage.input = band;
-        band = stage.output;
-        if (s == 1 || s == 3)
-          bands[s / 2] = band;
-      }
+      const bool started = residual_samples_ > 0.0;
+      const auto high_pass = [high, started](HighPass* stage, double input) {
+        stage->output = started ? high * (stage->output + input - stage->input) : 0.0;
+        stage->input = input;
+        return stage->output;
+      };
       residual_samples_ += 1.0;
-      for (std::size_t j = 0; j < bands.size(); ++j)
-      {
-        const double missed = residual_heave_[j].update(bands[j], residual_samples_ > 1.0 ? dt : 0.0).position;
-        residual_band_variance_[j] +=
-            std::max(minute, 1.0 / residual_samples_) * (missed * missed - residual_band_variance_[j]);
-      }
+      const double average_missed = std::max(minute, 1.0 / residual_samples_);
+      const auto measure_missed = [&](std::size_t way, double band) {
+        const double missed = residual_heave_[way].update(band, residual_samples_ > 1.0 ? dt : 0.0).position;
+        residual_band_variance_[way] += average_missed * (missed * missed - residual_band_variance_[way]);
+      };
+      const double two = high_pass(&residual_high_[1], high_pass(&residual_high_[0], in.residual));
+      measure_missed(kTwoPasses, two);
+      if (four_passes)
+        measure_missed(kFourPasses, high_pass(&residual_high_[3], high_pass(&residual_high_[2], two)));
       const double difference = in.harmonic_position - out.estimate.position;
-      difference_variance_ +=
-          std::max(minute, 1.0 / residual_samples_) * (difference * difference - difference_variance_);
+      difference_variance_ += average_missed * (difference * difference - difference_variance_);
     }
     const double low = 1.0 - std::exp(-dt * M_PI * min_frequency_);
     double below = out.estimate.position;
@@ -116,9 +116,8 @@ BroadbandWaveOutput BroadbandWave::update(const BroadbandWaveInput& in)
   // the integral of omega^(2m - 4) df / (omega^2 + omega_h^2)^m over m high-passes,
   // 1 / (8 omega_h^3) for two, 1 / (64 omega_h^3) for four.
   const double omega_h = 2.0 * M_PI * min_frequency_;
-  const bool four = vertical_ && !spectral_.designed();
-  const double noise = noiseDensitySquared(in.rate) / ((four ? 64.0 : 8.0) * omega_h * omega_h * omega_h);
-  const double missed = std::max(0.0, residual_band_variance_[four ? 1 : 0] - noise);
+  const double noise = noiseDensitySquared(in.rate) / ((four_passes ? 64.0 : 8.0) * omega_h * omega_h * omega_h);
+  const double missed = std::max(0.0, residual_band_variance_[four_passes ? kFourPasses : kTwoPasses] - noise);
   const double broadband = out.position_variance + std::max(low_variance_, low_.back() * low_.back());
   double target = missed > 0.0 ? missed / (missed + broadband) : 0.0;
   // The residual sees only the wave band: bias wander below it never opens the share. But a model

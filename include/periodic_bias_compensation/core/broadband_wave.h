@@ -101,7 +101,10 @@ private:
   double min_frequency_;
   HeaveFilter fixed_;
   WienerHeave spectral_;
-  /// The harmonic model's residual above the band edge, through two and through four high-passes.
+  /// The two ways the harmonic model's residual is measured above the band edge.
+  static constexpr std::size_t kTwoPasses = 0;
+  static constexpr std::size_t kFourPasses = 1;  ///< the vertical axis until the first design only
+  /// The high-passes of the residual: [0], [1] for both ways, [2], [3] for four passes.
   std::array<HighPass, 4> residual_high_{};
   std::array<HeaveFilter, 2> residual_heave_;  ///< the residual's displacement, each way
   std::array<double, 2> residual_band_variance_{};
