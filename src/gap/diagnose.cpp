@@ -378,20 +378,6 @@ void truthStage(const DiagnoseContext& context, const BaseEnsemble& base, Report
                    blockCsv(blockMeans(res, kTruthBlocks), base.truth_runs, rep->duration);
 }
 
-/// z-scores of member i of an ensemble against the other members.
-std::vector<double> leaveOneOutZ(const std::vector<std::vector<double>>& members, int i, const FeatureLayout& layout)
-{
-  std::vector<std::vector<double>> rest;
-  for (int j = 0; j < static_cast<int>(members.size()); ++j)
-  {
-    if (j != i)
-    {
-      rest.push_back(members[j]);
-    }
-  }
-  return zScores(members[i], ensembleStats(rest, layout));
-}
-
 /// 1. Where: departures on the whole recording, with the truth and compensator stages, ranked by
 /// |z|; the gap and the null gap of the whole recording.
 void whereStage(const DiagnoseContext& context, const BaseEnsemble& base, Report* rep)
@@ -437,9 +423,11 @@ std::vector<Recording> withheldStage(const DiagnoseContext& context, BaseEnsembl
     rep->motion.gap_before = rep->gap_before;
   }
   std::vector<double> null_gaps;
+  rep->null_z_held.clear();
   for (int i = 0; i < runs; ++i)
   {
-    const std::vector<double> zn = leaveOneOutZ(rep->ens_held_members, i, rep->layout_held);
+    rep->null_z_held.push_back(leaveOneOutZ(rep->ens_held_members, i, rep->layout_held));
+    const std::vector<double>& zn = rep->null_z_held.back();
     rep->null_gap_held = std::max(rep->null_gap_held, gapOf(zn));
     null_gaps.push_back(gapOf(zn));
     for (double v : zn)
@@ -530,6 +518,7 @@ void judge(const DiagnoseContext& context, const Report& rep, std::vector<Candid
     candidate.gap_after = gapOf(candidate.z_after, st.spread, rep.ens_held.spread);
     const double excess = rep.gap_before - rep.null_gap_typical;
     candidate.shrink = excess > 0 ? std::min(1.0, (rep.gap_before - candidate.gap_after) / excess) : 0.0;
+    candidate.own = ownShrink(rep.real_held, rep.ens_held, st, rep.null_z_held);
   }
 }
 
@@ -650,6 +639,34 @@ void candidateStage(const DiagnoseContext& context, std::vector<Recording> base_
   rep->ranking = cands;
 }
 
+/// An effect explains most of what it moves when its OwnShrink is at least this [-].
+constexpr double kMostOfWhatItMoves = 0.8;
+
+/// "; explaining at least 80 % of the departures each moves, though not the gap: a (S % of N
+/// features), ..." for the single effects with OwnShrink >= kMostOfWhatItMoves, best first; ""
+/// when none does.
+std::string partlyExplained(std::vector<Candidate> ranking)
+{
+  ranking.erase(std::remove_if(ranking.begin(), ranking.end(),
+                               [](const Candidate& c) {
+                                 return c.effect.find('+') != std::string::npos || c.own.moved == 0 ||
+                                        c.own.shrink < kMostOfWhatItMoves;
+                               }),
+                ranking.end());
+  if (ranking.empty())
+    return "";
+  std::stable_sort(ranking.begin(), ranking.end(),
+                   [](const Candidate& a, const Candidate& b) { return a.own.shrink > b.own.shrink; });
+  std::string text = "; explaining at least " + num(100.0 * kMostOfWhatItMoves) +
+                     " % of the departures each moves, though not the gap:";
+  for (std::size_t i = 0; i < ranking.size(); ++i)
+  {
+    text += (i ? ", " : " ") + ranking[i].effect + " (" + num(std::round(100.0 * ranking[i].own.shrink)) + " % of " +
+            std::to_string(ranking[i].own.moved) + " features)";
+  }
+  return text;
+}
+
 /// The highest confidence of a verdict whose fit a search limit stopped (not confident).
 constexpr double kAtLimitConfidence = 0.45;
 
@@ -674,6 +691,7 @@ void verdictStage(const DiagnoseOptions& opt, Report* rep)
     rep->shrink_withheld = rep->ranking.empty() ? 0.0 : rep->ranking[0].shrink;
     rep->verdict_text = "no candidate explains the gap (best shrink below " + num(opt.min_shrink) +
                         "); the residual is reported in 'where'";
+    rep->verdict_text += partlyExplained(rep->ranking);
   }
   else
   {
@@ -891,6 +909,12 @@ nlohmann::ordered_json rankingJson(const std::vector<Candidate>& ranking)
                   { "gap_before", sixDigits(c.gap_before) },
                   { "gap_after", sixDigits(c.gap_after) },
                   { "shrink", sixDigits(c.shrink) },
+                  { "own",
+                    { { "moved", c.own.moved },
+                      { "gap_before", sixDigits(c.own.before) },
+                      { "gap_after", sixDigits(c.own.after) },
+                      { "null", sixDigits(c.own.null_level) },
+                      { "shrink", sixDigits(c.own.shrink) } } },
                   { "fit", c.note },
                   { "at_limit", c.at_limit } });
   }
@@ -991,9 +1015,9 @@ std::string reportSummary(const Report& r)
   for (std::size_t i = 0; i < std::min<std::size_t>(8, r.ranking.size()); ++i)
   {
     const Candidate& c = r.ranking[i];
-    std::snprintf(buf, sizeof(buf), "  %-34s gap %.3g -> %.3g  shrink %+6.1f %%  %.150s%s\n", c.effect.c_str(),
-                  c.gap_before, c.gap_after, 100 * c.shrink, c.params.dump().c_str(),
-                  c.at_limit.empty() ? "" : "  [at a search limit]");
+    std::snprintf(buf, sizeof(buf), "  %-34s gap %.3g -> %.3g  shrink %+6.1f %%  own %+4.0f %% of %-4d %.150s%s\n",
+                  c.effect.c_str(), c.gap_before, c.gap_after, 100 * c.shrink, 100 * c.own.shrink, c.own.moved,
+                  c.params.dump().c_str(), c.at_limit.empty() ? "" : "  [at a search limit]");
     o << buf;
   }
   std::snprintf(buf, sizeof(buf), "VERDICT: %s (confidence %.2f, shrink on withheld %.0f %%)\n  params %s\n  %s\n",

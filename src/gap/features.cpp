@@ -303,6 +303,61 @@ double gapOf(const std::vector<double>& z, const std::vector<double>& spread, co
   return std::sqrt(sum / z.size());
 }
 
+std::vector<double> leaveOneOutZ(const std::vector<std::vector<double>>& members, int i, const FeatureLayout& layout)
+{
+  std::vector<std::vector<double>> rest;
+  for (int j = 0; j < static_cast<int>(members.size()); ++j)
+  {
+    if (j != i)
+    {
+      rest.push_back(members[j]);
+    }
+  }
+  return zScores(members[i], ensembleStats(rest, layout));
+}
+
+OwnShrink ownShrink(const std::vector<double>& real, const EnsembleStats& base, const EnsembleStats& candidate,
+                    const std::vector<std::vector<double>>& null_z)
+{
+  OwnShrink own;
+  std::vector<std::size_t> moved;
+  for (std::size_t k = 0; k < base.median.size() && k < candidate.median.size(); ++k)
+  {
+    if (std::abs(candidate.median[k] - base.median[k]) > kMovedSpreads * base.spread[k])
+    {
+      moved.push_back(k);
+    }
+  }
+  own.moved = static_cast<int>(moved.size());
+  if (moved.empty())
+  {
+    return own;
+  }
+  const auto over_moved = [&moved](const std::vector<double>& values) {
+    std::vector<double> out;
+    for (std::size_t k : moved)
+    {
+      out.push_back(values[k]);
+    }
+    return out;
+  };
+  own.before = gapOf(over_moved(zScores(real, base)));
+  own.after = gapOf(over_moved(zScores(real, candidate)), over_moved(candidate.spread), over_moved(base.spread));
+  std::vector<double> nulls;
+  for (const std::vector<double>& z : null_z)
+  {
+    nulls.push_back(gapOf(over_moved(z)));
+  }
+  if (!nulls.empty())
+  {
+    std::sort(nulls.begin(), nulls.end());
+    own.null_level = nulls[nulls.size() / 2];
+  }
+  const double excess = own.before - own.null_level;
+  own.shrink = excess > 0.0 ? std::min(1.0, (own.before - own.after) / excess) : 0.0;
+  return own;
+}
+
 std::vector<Departure> rankDepartures(const std::vector<double>& real, const EnsembleStats& stats,
                                       const FeatureLayout& layout, double threshold, std::size_t max_count)
 {

@@ -366,12 +366,18 @@ std::string reportMarkdown(const gap::Report& rep, const Options& o, bool plots)
   std::snprintf(buf, sizeof(buf),
                 "Gap of the scenario as given on the withheld part: %.3g (typical member vs the rest: %.3g).\n\n",
                 rep.gap_before, rep.null_gap_typical);
-  md << buf << "| rank | effect | gap before | gap after | shrink | fitted parameters |\n|---|---|---|---|---|---|\n";
+  md << buf
+     << "Shrink on what it moves: the same measure over the features the candidate moves only "
+        "(its ensemble median beyond "
+     << gap::kMovedSpreads
+     << " spreads of the base's), how much of its own departures it explains whatever else the gap holds.\n\n";
+  md << "| rank | effect | gap before | gap after | shrink | shrink on what it moves (features) | fitted parameters |\n"
+        "|---|---|---|---|---|---|---|\n";
   for (std::size_t i = 0; i < rep.ranking.size(); ++i)
   {
     const auto& c = rep.ranking[i];
-    std::snprintf(buf, sizeof(buf), "| %zu | %s | %.3g | %.3g | %.0f %% | `", i + 1, c.effect.c_str(), c.gap_before,
-                  c.gap_after, 100 * c.shrink);
+    std::snprintf(buf, sizeof(buf), "| %zu | %s | %.3g | %.3g | %.0f %% | %.0f %% (%d) | `", i + 1, c.effect.c_str(),
+                  c.gap_before, c.gap_after, 100 * c.shrink, 100 * c.own.shrink, c.own.moved);
     md << buf << c.params.dump() << "`";
     for (const std::string& limit : c.at_limit)
     {

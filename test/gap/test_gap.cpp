@@ -197,6 +197,56 @@ TEST(GapSignal, RepeatedReadingsAreNotClipping)
   EXPECT_EQ(gap::repeatedFraction(data.topRows(1)), 0.0);
 }
 
+TEST(GapMetric, OwnShrinkJudgesACandidateOnTheFeaturesItMoves)
+{
+  // Six features; the real recording departs by 10 spreads on 0 and 1 (a sensor effect) and by 20
+  // on 2-5 (a motion no candidate reproduces).
+  gap::FeatureLayout layout;
+  layout.info.resize(6);
+  std::mt19937_64 rng(11);
+  std::normal_distribution<double> n(0.0, 1.0);
+  std::vector<std::vector<double>> base(9, std::vector<double>(6));
+  for (auto& member : base)
+    for (double& v : member)
+      v = n(rng);
+  const gap::EnsembleStats stats = gap::ensembleStats(base, layout);
+  std::vector<std::vector<double>> null_z;
+  for (int i = 0; i < static_cast<int>(base.size()); ++i)
+    null_z.push_back(gap::leaveOneOutZ(base, i, layout));
+  std::vector<double> real = stats.median;
+  for (int k = 0; k < 6; ++k)
+    real[k] += (k < 2 ? 10.0 : 20.0) * stats.spread[k];
+  const auto shifted = [&](const std::vector<double>& shift) {
+    std::vector<std::vector<double>> members = base;
+    for (auto& member : members)
+      for (int k = 0; k < 6; ++k)
+        member[k] += shift[k] * stats.spread[k];
+    return gap::ensembleStats(members, layout);
+  };
+
+  // The effect: it moves features 0 and 1 onto the real values and explains them all, while the
+  // whole gap, held up by the motion, shrinks by less than a third.
+  const gap::EnsembleStats right = shifted({ 10, 10, 0, 0, 0, 0 });
+  const gap::OwnShrink own = gap::ownShrink(real, stats, right, null_z);
+  EXPECT_EQ(own.moved, 2);
+  EXPECT_GT(own.before, own.null_level);
+  EXPECT_NEAR(own.after, 0.0, 0.3);
+  EXPECT_GT(own.shrink, 0.9);
+  const double before = gap::gapOf(gap::zScores(real, stats));
+  const double after = gap::gapOf(gap::zScores(real, right), right.spread, stats.spread);
+  EXPECT_LT((before - after) / before, 1.0 / 3.0);
+
+  // Moving a feature away from the real value makes things worse there.
+  const gap::OwnShrink wrong = gap::ownShrink(real, stats, shifted({ -10, 0, 0, 0, 0, 0 }), null_z);
+  EXPECT_EQ(wrong.moved, 1);
+  EXPECT_LT(wrong.shrink, 0.0);
+
+  // A candidate that moves nothing (within kMovedSpreads) is judged on nothing.
+  const gap::OwnShrink none = gap::ownShrink(real, stats, shifted({ 1, 1, 1, 1, 1, 1 }), null_z);
+  EXPECT_EQ(none.moved, 0);
+  EXPECT_EQ(none.shrink, 0.0);
+}
+
 sim::Scenario sinusoidBase()
 {
   sim::Scenario s;

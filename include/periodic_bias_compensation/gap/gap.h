@@ -232,6 +232,9 @@ EnsembleStats ensembleStats(const std::vector<std::vector<double>>& members, con
 /// z-scores of a feature vector against an ensemble.
 std::vector<double> zScores(const std::vector<double>& features, const EnsembleStats& stats);
 
+/// z-scores of member i of an ensemble against the other members.
+std::vector<double> leaveOneOutZ(const std::vector<std::vector<double>>& members, int i, const FeatureLayout& layout);
+
 /// Gap = root mean square of log(1 + max(0, |z| - kZThreshold)) over features [-]: 0 when every
 /// feature lies within the ensemble's spread; the logarithm keeps one huge departure (a mean
 /// many spreads off) from hiding many moderate ones.
@@ -249,6 +252,27 @@ constexpr double kVibrationMinFrequency = 1.0;
 /// idea: a wider predictive spread costs its logarithm).
 constexpr double kSpreadPenalty = 0.3;
 double gapOf(const std::vector<double>& z, const std::vector<double>& spread, const std::vector<double>& base_spread);
+
+/// A candidate moves a feature when its ensemble's median lies more than this many of the base
+/// ensemble's spreads from the base median [-].
+constexpr double kMovedSpreads = 3.0;
+
+/// What a candidate explains of the departures it touches, whatever else the gap holds (a motion
+/// the scenario cannot reproduce, another effect): the gap over the features it moves, before and
+/// after, against the null level over the same features.
+struct OwnShrink
+{
+  int moved = 0;            ///< features the candidate moves
+  double before = 0.0;      ///< gap over them, the base ensemble
+  double after = 0.0;       ///< with the candidate (gapOf with its spread penalty)
+  double null_level = 0.0;  ///< median over the base members of one member against the rest
+  double shrink = 0.0;      ///< (before - after) / (before - null_level), at most 1; 0 without an excess
+};
+
+/// OwnShrink of a candidate whose ensemble is `candidate`, for the real features `real` against
+/// the base ensemble `base`; `null_z`: each base member's leaveOneOutZ.
+OwnShrink ownShrink(const std::vector<double>& real, const EnsembleStats& base, const EnsembleStats& candidate,
+                    const std::vector<std::vector<double>>& null_z);
 
 /// One departure of the real recording from the simulated ensemble.
 struct Departure
@@ -291,6 +315,7 @@ struct Candidate
   double gap_after = 0.0;
   double shrink = 0.0;          ///< (before - after) / (before - typical null gap), at most 1
   std::vector<double> z_after;  ///< withheld z-scores with the effect
+  OwnShrink own;                ///< on the withheld features it moves
   /// Fitted parameters that the fitter's search range stopped, each "name = value, ...": the
   /// effect may be larger than the fit says, or another one. A verdict on such a fit is never
   /// confident (confidence below 0.5).
@@ -394,10 +419,11 @@ struct Report
   EnsembleStats ens_held;
   double gap_before = 0.0;  ///< withheld part, scenario as given
   double null_gap_held = 0.0;
-  double null_gap_typical = 0.0;   ///< median gap of one member vs the rest (shrink reference)
-  double max_z_held = 0.0;         ///< largest |z| of the real withheld part
-  double null_max_z_held = 0.0;    ///< largest |z| of one member vs the rest
-  std::vector<Candidate> ranking;  ///< best first
+  double null_gap_typical = 0.0;                 ///< median gap of one member vs the rest (shrink reference)
+  double max_z_held = 0.0;                       ///< largest |z| of the real withheld part
+  double null_max_z_held = 0.0;                  ///< largest |z| of one member vs the rest
+  std::vector<std::vector<double>> null_z_held;  ///< each member's leaveOneOutZ on the withheld part
+  std::vector<Candidate> ranking;                ///< best first
   std::vector<DirectDetection> direct;
   // verdict
   std::string verdict_effect;  ///< effect name, "a+b", "none" (no candidate explains) or "no_gap"
