@@ -35,6 +35,8 @@ void BroadbandWave::reset()
   spectral_share_ = 0.0;
   low_ = {};
   low_variance_ = 0.0;
+  wave_variance_ = 0.0;
+  wave_velocity_variance_ = 0.0;
   previous_raw_ = NAN;
   noise_variance_ = 0.0;
 }
@@ -109,6 +111,8 @@ BroadbandWaveOutput BroadbandWave::update(const BroadbandWaveInput& in)
     for (double& stage : low_)
       below = stage += low * (below - stage);
     low_variance_ += average * (below * below - low_variance_);
+    wave_variance_ += average * (out.estimate.position * out.estimate.position - wave_variance_);
+    wave_velocity_variance_ += average * (out.estimate.velocity * out.estimate.velocity - wave_velocity_variance_);
   }
   previous_raw_ = in.raw;
 
@@ -127,6 +131,13 @@ BroadbandWaveOutput BroadbandWave::update(const BroadbandWaveInput& in)
   // E[(x_harmonic - x_broadband)^2] = V_missed + V_broadband for independent errors.
   if (target >= kMinWeight && difference_variance_ > broadband)
     target = std::max(target, 1.0 - broadband / difference_variance_);
+  // What the harmonic model's displacement misses: with a lock, what the residual or the difference
+  // says; without one its output is none, so the whole wave. Velocity in proportion, at the
+  // broadband estimate's own ratio of velocity to displacement.
+  out.harmonic_miss_variance =
+      in.locked ? std::max(missed, std::max(0.0, difference_variance_ - broadband)) : wave_variance_;
+  out.harmonic_miss_velocity_variance =
+      wave_variance_ > 0.0 ? out.harmonic_miss_variance * wave_velocity_variance_ / wave_variance_ : 0.0;
   const bool blocked = !vertical_ && !in.allowed;
   if (!vertical_ && (!spectral.valid || blocked))
     target = 0.0;

@@ -748,12 +748,15 @@ private:
     out->axes[i].periodic_bias = wave_a;
     DriftObserver::noiseVariances(axis.residual_variance, rate_, config_.drift_time_constant,
                                   &out->position_variance[i], &out->velocity_variance[i]);
-    // The blend's variance (broadbandWave), errors taken as independent.
+    // The blend's variance (broadbandWave), errors taken as independent: the harmonic model's own
+    // noise plus what it misses of the wave (all of it while it has no lock).
     const double harmonic_share = (1.0 - broadband.weight) * (1.0 - broadband.weight);
     const double broadband_share = broadband.weight * broadband.weight;
     out->wave_position_variance[i] =
-        harmonic_share * axis.residual_variance * variance_factor + broadband_share * broadband.position_variance;
-    out->wave_velocity_variance[i] = harmonic_share * axis.residual_variance * velocity_variance_factor +
+        harmonic_share * (axis.residual_variance * variance_factor + broadband.harmonic_miss_variance) +
+        broadband_share * broadband.position_variance;
+    out->wave_velocity_variance[i] = harmonic_share * (axis.residual_variance * velocity_variance_factor +
+                                                       broadband.harmonic_miss_velocity_variance) +
                                      broadband_share * broadband.velocity_variance;
   }
 

@@ -361,10 +361,23 @@ void scaleToHs(std::vector<double>* amplitude, double hs, double m0, double df)
     a = std::sqrt(2.0 * a * (hs * hs / 16.0) / m0 * df);
 }
 
-/// Heave RMS error after 20 s in % of Hs on a moored JONSWAP sea (gamma 3.3, 300 components with
-/// random phases, 0.04-0.6 Hz; Hs 1.2-2.4 m, Tp 7-10 s drawn from the seed), level IMU reporting
-/// orientation at 50 Hz, noise 0.004 m/s^2/sqrt(Hz), a constant bias and a bias random walk.
-double mooredHeaveError(unsigned seed, double random_walk, double duration)
+/// What mooredHeave() measures.
+struct MooredHeave
+{
+  double error_percent_hs = 0.0;  ///< heave RMS error after 20 s [% of Hs]
+  /// Of the 10 s windows from the first output on, the share where the RMS error exceeds three
+  /// times the published standard deviation (its root mean variance there) [-].
+  double overconfident_windows = 0.0;
+  /// Mean squared error over mean published variance, after 20 s [-]: 1 for an honest variance.
+  double error_to_variance = 0.0;
+};
+
+/// Heave on a moored JONSWAP sea (gamma 3.3, 300 components with random phases, 0.04-0.6 Hz;
+/// Hs 1.2-2.4 m, Tp 7-10 s drawn from the seed), level IMU reporting orientation at 50 Hz, noise
+/// 0.004 m/s^2/sqrt(Hz), a constant bias, a bias random walk [m/s^2/sqrt(s)] and a slow periodic
+/// bias of amplitude `slow_bias` [m/s^2] (periods 120, 180 and 240 s on x, y and z): its error
+/// and how honest the published variance is.
+MooredHeave mooredHeave(unsigned seed, double random_walk, double duration, double slow_bias = 0.0)
 {
   std::mt19937_64 rng(seed);
   std::normal_distribution<double> normal(0.0, 1.0);
@@ -385,8 +398,10 @@ double mooredHeaveError(unsigned seed, double random_walk, double duration)
   const double rate = 50.0, sigma = 0.004 * std::sqrt(rate / 2.0);
   Compensator compensator;
   Vector3 walk = Vector3::Zero();
-  double error2 = 0.0;
+  double error2 = 0.0, variance = 0.0;
   long counted = 0;
+  double window_error2 = 0.0, window_variance = 0.0;
+  long window_samples = 0, windows = 0, overconfident = 0;
   for (long i = 0; i < static_cast<long>(duration * rate); ++i)
   {
     const double t = i / rate;
@@ -402,16 +417,35 @@ double mooredHeaveError(unsigned seed, double random_walk, double duration)
     ImuSample s;
     s.t = 100.0 + t;
     s.specific_force = Vector3(0, 0, az + pbc::kStandardGravity) + Vector3(0.03, -0.02, 0.05) + walk +
-                       sigma * pbc::test::drawVector([&] { return normal(rng); });
+                       sigma * pbc::test::drawVector([&] { return normal(rng); }) +
+                       slow_bias * Vector3(std::sin(2.0 * M_PI * t / 120.0), std::sin(2.0 * M_PI * t / 180.0),
+                                           std::sin(2.0 * M_PI * t / 240.0));
     s.has_orientation = true;
     CompensatorOutput out;
-    if (pbc::producedOutput(compensator.addSample(s, &out)) && t >= 20.0)
+    if (!pbc::producedOutput(compensator.addSample(s, &out)))
+      continue;
+    const double e2 = std::pow(out.position_wave.z() - z, 2);
+    if (t >= 20.0)
     {
-      error2 += std::pow(out.position_wave.z() - z, 2);
+      error2 += e2;
+      variance += out.wave_position_variance.z();
       ++counted;
     }
+    window_error2 += e2;
+    window_variance += out.wave_position_variance.z();
+    if (++window_samples == static_cast<long>(10.0 * rate))
+    {
+      ++windows;
+      overconfident += window_error2 > 9.0 * window_variance ? 1 : 0;
+      window_error2 = window_variance = 0.0;
+      window_samples = 0;
+    }
   }
-  return 100.0 * std::sqrt(error2 / counted) / hs;
+  MooredHeave result;
+  result.error_percent_hs = 100.0 * std::sqrt(error2 / counted) / hs;
+  result.overconfident_windows = static_cast<double>(overconfident) / std::max<long>(windows, 1);
+  result.error_to_variance = error2 / variance;
+  return result;
 }
 }  // namespace
 
@@ -419,22 +453,61 @@ TEST(RealWorldStreams, MooredBroadSeaHeave)
 {
   // 15 min of moored JONSWAP sea per seed, with a clean sensor and with a bias random walk of
   // 6e-4 m/s^2/sqrt(s): heave error under 5 % of Hs with the clean sensor; with the walk, the
-  // median at most 4 % and the worst 6 %.
+  // median at most 4 % and the worst 6 %. The published variance is honest from the first
+  // output on, the start included: the error exceeds three standard deviations in at most one
+  // 10 s window in twenty, and the mean squared error lies within a factor of 3 of the mean
+  // variance.
   std::vector<double> walks;
   for (unsigned seed = 1; seed <= pbc::test::seedsToRun(5); ++seed)
   {
-    const double clean = mooredHeaveError(seed, 0.0, 900.0);
-    const double walk = mooredHeaveError(seed, 6e-4, 900.0);
-    RecordProperty("heave_error_percent_hs_clean_" + std::to_string(seed), std::to_string(clean));
-    RecordProperty("heave_error_percent_hs_random_walk_" + std::to_string(seed), std::to_string(walk));
-    std::printf("[moored JONSWAP, seed %u] heave error %.2f %% of Hs clean, %.2f %% with the random walk\n", seed,
-                clean, walk);
-    EXPECT_LT(clean, 5.0) << "seed " << seed;
-    walks.push_back(walk);
+    for (const double random_walk : { 0.0, 6e-4 })
+    {
+      const MooredHeave heave = mooredHeave(seed, random_walk, 900.0);
+      const std::string name = (random_walk > 0.0 ? "random_walk_" : "clean_") + std::to_string(seed);
+      RecordProperty("heave_error_percent_hs_" + name, std::to_string(heave.error_percent_hs));
+      RecordProperty("heave_overconfident_windows_" + name, std::to_string(heave.overconfident_windows));
+      RecordProperty("heave_error_to_variance_" + name, std::to_string(heave.error_to_variance));
+      std::printf(
+          "[moored JONSWAP, seed %u, %s] heave error %.2f %% of Hs; windows with error beyond 3 std %.3f; "
+          "mean squared error / mean variance %.2f\n",
+          seed, random_walk > 0.0 ? "random walk" : "clean", heave.error_percent_hs, heave.overconfident_windows,
+          heave.error_to_variance);
+      if (random_walk > 0.0)
+        walks.push_back(heave.error_percent_hs);
+      else
+        EXPECT_LT(heave.error_percent_hs, 5.0) << "seed " << seed;
+      EXPECT_LE(heave.overconfident_windows, 0.05) << name;
+      EXPECT_GT(heave.error_to_variance, 1.0 / 3.0) << name;
+      EXPECT_LT(heave.error_to_variance, 3.0) << name;
+    }
   }
   std::sort(walks.begin(), walks.end());
   EXPECT_LE(walks[walks.size() / 2], 4.0);
   EXPECT_LE(walks.back(), 6.0);
+}
+
+TEST(RealWorldStreams, MooredHeaveVarianceStaysHonestUnderSlowBias)
+{
+  // The moored seas above with a slow periodic bias of 0.04 m/s^2 (periods 120-240 s) and the
+  // random walk: the harmonic model locks later and misses more, and the published variance says
+  // so. The mean squared error lies within a factor of 2.5 of the mean variance and exceeds three
+  // standard deviations in at most 6 % of the 10 s windows. (The heave error itself, 5-7 % of Hs
+  // here, is recorded, not asserted.)
+  for (unsigned seed = 1; seed <= pbc::test::seedsToRun(5); ++seed)
+  {
+    const MooredHeave heave = mooredHeave(seed, 6e-4, 900.0, 0.04);
+    const std::string name = std::to_string(seed);
+    RecordProperty("heave_error_percent_hs_" + name, std::to_string(heave.error_percent_hs));
+    RecordProperty("heave_overconfident_windows_" + name, std::to_string(heave.overconfident_windows));
+    RecordProperty("heave_error_to_variance_" + name, std::to_string(heave.error_to_variance));
+    std::printf(
+        "[moored JONSWAP, slow periodic bias, seed %u] heave error %.2f %% of Hs; windows with error beyond "
+        "3 std %.3f; mean squared error / mean variance %.2f\n",
+        seed, heave.error_percent_hs, heave.overconfident_windows, heave.error_to_variance);
+    EXPECT_LE(heave.overconfident_windows, 0.06) << "seed " << seed;
+    EXPECT_GT(heave.error_to_variance, 1.0 / 3.0) << "seed " << seed;
+    EXPECT_LT(heave.error_to_variance, 2.5) << "seed " << seed;
+  }
 }
 
 namespace

@@ -58,6 +58,11 @@ struct BroadbandWaveOutput
   double weight = 0.0;             ///< its share of the wave output [-]
   double position_variance = 0.0;  ///< of the broadband estimate [m^2]
   double velocity_variance = 0.0;  ///< [m^2/s^2]
+  /// What the harmonic model's displacement misses, as a variance [m^2]: with a lock the larger of
+  /// the measured miss and the excess of its difference from the broadband estimate; without one
+  /// (its output faded to zero) the whole wave, the broadband estimate's mean square.
+  double harmonic_miss_variance = 0.0;
+  double harmonic_miss_velocity_variance = 0.0;  ///< [m^2/s^2]
 };
 
 class BroadbandWave
@@ -115,6 +120,8 @@ private:
   double spectral_share_ = 0.0;  ///< of the spectral estimate against the fixed filter
   std::array<double, 2> low_{};  ///< the broadband output below the wave band
   double low_variance_ = 0.0;
+  double wave_variance_ = 0.0;           ///< mean square of the broadband displacement [m^2]
+  double wave_velocity_variance_ = 0.0;  ///< and of its velocity [m^2/s^2]
   double previous_raw_ = NAN;
   double noise_variance_ = 0.0;  ///< white noise per sample [(m/s^2)^2]
 };
