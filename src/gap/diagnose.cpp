@@ -9,7 +9,9 @@
 #include <set>
 #include <sstream>
 
-#include "periodic_bias_compensation/gap/gap.h"
+#include "periodic_bias_compensation/gap/diagnose.h"
+#include "periodic_bias_compensation/gap/signal.h"
+#include "periodic_bias_compensation/gap/truth.h"
 #include "periodic_bias_compensation/sim/effects.h"
 
 namespace periodic_bias_compensation::gap

@@ -4,7 +4,8 @@
 #include <cstdio>
 
 #include "periodic_bias_compensation/common/numeric.h"
-#include "periodic_bias_compensation/gap/gap.h"
+#include "periodic_bias_compensation/gap/features.h"
+#include "periodic_bias_compensation/gap/signal.h"
 
 namespace periodic_bias_compensation::gap
 {

@@ -13,7 +13,9 @@
 #include <Eigen/Dense>
 
 #include "periodic_bias_compensation/common/numeric.h"
-#include "periodic_bias_compensation/gap/gap.h"
+#include "periodic_bias_compensation/gap/diagnose.h"
+#include "periodic_bias_compensation/gap/features.h"
+#include "periodic_bias_compensation/gap/signal.h"
 #include "periodic_bias_compensation/sim/effects.h"
 
 namespace periodic_bias_compensation::gap

@@ -6,7 +6,8 @@
 #include <optional>
 
 #include "periodic_bias_compensation/common/numeric.h"
-#include "periodic_bias_compensation/gap/gap.h"
+#include "periodic_bias_compensation/gap/motion.h"
+#include "periodic_bias_compensation/gap/signal.h"
 
 namespace periodic_bias_compensation::gap
 {

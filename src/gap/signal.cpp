@@ -15,7 +15,8 @@
 
 #include "periodic_bias_compensation/common/fftw_planner.h"
 #include "periodic_bias_compensation/common/numeric.h"
-#include "periodic_bias_compensation/gap/gap.h"
+#include "periodic_bias_compensation/gap/recording.h"
+#include "periodic_bias_compensation/gap/signal.h"
 #include "periodic_bias_compensation/sim/simulator.h"
 
 namespace periodic_bias_compensation::gap

@@ -7,7 +7,7 @@
 
 #include "periodic_bias_compensation/common/numeric.h"
 #include "periodic_bias_compensation/core/compensator.h"
-#include "periodic_bias_compensation/gap/gap.h"
+#include "periodic_bias_compensation/gap/truth.h"
 
 namespace periodic_bias_compensation::gap
 {

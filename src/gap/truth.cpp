@@ -5,7 +5,8 @@
 #include <cstdio>
 #include <stdexcept>
 
-#include "periodic_bias_compensation/gap/gap.h"
+#include "periodic_bias_compensation/gap/signal.h"
+#include "periodic_bias_compensation/gap/truth.h"
 #include "periodic_bias_compensation/sim/simulator.h"
 
 namespace periodic_bias_compensation::gap

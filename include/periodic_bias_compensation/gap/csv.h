@@ -4,7 +4,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "periodic_bias_compensation/gap/gap.h"
+#include "periodic_bias_compensation/gap/recording.h"
 
 namespace periodic_bias_compensation::gap
 {
