@@ -131,7 +131,8 @@ WienerHeaveOutput WienerHeave::update(double a, double dt, double noise_density_
   }
   since_design_ += dt_;
   const double recorded = decimated_.size() * decimation_ * dt_;
-  if ((current_ && !stale_ ? since_design_ >= kRedesignInterval : recorded >= kFirstDesign) &&
+  const double interval = recorded < kEarlyRecord ? kEarlyRedesignInterval : kRedesignInterval;
+  if ((current_ && !stale_ ? since_design_ >= interval : recorded >= kFirstDesign) &&
       static_cast<int>(decimated_.size()) >= kMinSegment)
   {
     design(noise_density_squared);

@@ -8,7 +8,9 @@
 //
 //  1. low-passes the acceleration (two moving averages of D samples, D dt ~ 0.5 s) and keeps it
 //     at the full rate, and every D-th value at the design rate 1 / (D dt) ~ 2 Hz;
-//  2. every kRedesignInterval, from the last kDesignWindow of design-rate values: a Welch
+//  2. every kRedesignInterval (kEarlyRedesignInterval while the record is shorter than
+//     kEarlyRecord: each design from a short record improves on the last by more), from the last
+//     kDesignWindow of design-rate values: a Welch
 //     spectrum (Hann segments of kSegment, half overlap), the wave acceleration in it
 //     (the spectrum less three times the white-noise floor, nothing below min_frequency), and
 //     from that the cross-correlation between displacement (acceleration / -omega^2) and the
@@ -46,20 +48,22 @@ struct WienerHeaveOutput
 class WienerHeave
 {
 public:
-  static constexpr double kDesignPeriod = 0.5;       ///< target spacing of the design rate [s]
-  static constexpr double kFirstDesign = 60.0;       ///< data before the first design [s]
-  static constexpr double kDesignWindow = 600.0;     ///< data a design uses at most [s]
-  static constexpr double kRedesignInterval = 30.0;  ///< [s]
-  static constexpr int kSegment = 256;               ///< Welch segment [design-rate samples]
-  static constexpr int kMinSegment = 64;             ///< the shortest, for early designs
-  static constexpr int kDftSize = 1024;              ///< zero-padded transform of a segment
-  static constexpr double kSpanPeriods = 6.0;        ///< FIR span in peak periods
-  static constexpr double kMinSpan = 20.0;           ///< [s]
-  static constexpr double kMaxSpan = 120.0;          ///< [s]
-  static constexpr double kNoiseMargin = 3.0;        ///< multiples of the noise floor taken as noise
-  static constexpr double kDesignFade = 2.0;         ///< [s]
-  static constexpr double kMinPeriod = 1e-4;         ///< shortest sample period taken (10 kHz) [s]
-  static constexpr double kMaxPeriod = 10.0;         ///< longest [s]
+  static constexpr double kDesignPeriod = 0.5;           ///< target spacing of the design rate [s]
+  static constexpr double kFirstDesign = 50.0;           ///< data before the first design [s]
+  static constexpr double kDesignWindow = 600.0;         ///< data a design uses at most [s]
+  static constexpr double kRedesignInterval = 30.0;      ///< [s]
+  static constexpr double kEarlyRedesignInterval = 5.0;  ///< while the record is short [s]
+  static constexpr double kEarlyRecord = 300.0;          ///< a record shorter than this is short [s]
+  static constexpr int kSegment = 256;                   ///< Welch segment [design-rate samples]
+  static constexpr int kMinSegment = 64;                 ///< the shortest, for early designs
+  static constexpr int kDftSize = 1024;                  ///< zero-padded transform of a segment
+  static constexpr double kSpanPeriods = 6.0;            ///< FIR span in peak periods
+  static constexpr double kMinSpan = 20.0;               ///< [s]
+  static constexpr double kMaxSpan = 120.0;              ///< [s]
+  static constexpr double kNoiseMargin = 3.0;            ///< multiples of the noise floor taken as noise
+  static constexpr double kDesignFade = 2.0;             ///< [s]
+  static constexpr double kMinPeriod = 1e-4;             ///< shortest sample period taken (10 kHz) [s]
+  static constexpr double kMaxPeriod = 10.0;             ///< longest [s]
 
   /// min_frequency [Hz]: the lowest wave frequency; below it nothing is heave.
   explicit WienerHeave(double min_frequency = 0.04);
