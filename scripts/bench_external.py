@@ -422,6 +422,20 @@ def odometry_positions(bag):
     return {topic: np.array(rows) for topic, rows in series.items()}
 
 
+def wave_variances(bag):
+    """Array of (time, var x, var y, var z) of the position covariance of an estimator's
+    odometry/wave (None without that topic)."""
+    import numpy as np
+    import rosbag
+    rows = []
+    with rosbag.Bag(bag) as b:
+        for topic, m, _ in b.read_messages():
+            if topic.lstrip('/') == 'odometry/wave':
+                c = m.pose.covariance
+                rows.append((m.header.stamp.to_sec() - STAMP0, c[0], c[7], c[14]))
+    return np.array(rows) if rows else None
+
+
 def position_track(bag):
     """Times and positions (slow + wave motion; slow motion) of an estimator's bag, as published
     (each estimator starts at zero)."""
@@ -497,9 +511,15 @@ SPECTRAL_SETS = {'buoy_morro_bay': ((0.04, 0.5), 300.0, 60.0),
                  'xio_ngimu_heave_30cm': ((0.3, 10.0), 5.0, 3.0)}
 
 
-def spectral_rows(name, reference, track):
+# Outputs held at zero during the calibration window carry this variance (1e6) or more: they are
+# left out of the published standard deviation.
+HELD_VARIANCE = 1e5
+
+
+def spectral_rows(name, reference, track, variances):
     """Per axis: correlation of the estimator's wave position with the frequency-domain estimate,
-    and 4 x std of each, over the compared part."""
+    4 x std of each, the RMS of their difference and the standard deviation the estimator
+    publishes (root of its mean position variance; NaN without), over the compared part."""
     import numpy as np
     _, start, end_margin = SPECTRAL_SETS[name]
     grid, displacement = reference
@@ -509,7 +529,13 @@ def spectral_rows(name, reference, track):
         ours = np.interp(grid[keep], track[:, 0], track[:, i + 1])
         ref = displacement[keep, i]
         correlation = float(np.corrcoef(ours, ref)[0, 1]) if ours.std() > 0 and ref.std() > 0 else float('nan')
-        rows.append((axis, correlation, 4 * ours.std(), 4 * ref.std()))
+        difference = float(np.sqrt(np.mean((ours - ref) ** 2)))
+        published = float('nan')
+        if variances is not None:
+            variance = np.interp(grid[keep], variances[:, 0], variances[:, i + 1])
+            variance = variance[variance < HELD_VARIANCE]
+            published = float(np.sqrt(np.mean(variance))) if variance.size else float('nan')
+        rows.append((axis, correlation, 4 * ours.std(), 4 * ref.std(), difference, published))
     return rows
 
 
@@ -583,7 +609,9 @@ def real(args):
                 for method in waves:
                     track = odometry_positions(waves[method]).get('odometry/wave')
                     if track is not None and 4 * track[:, 1:].std(0).max() >= 1e-3:  # methods with a wave output
-                        spectral.extend((name, method) + row for row in spectral_rows(name, reference, track))
+                        variances = wave_variances(waves[method])
+                        spectral.extend((name, method) + row
+                                        for row in spectral_rows(name, reference, track, variances))
             for f in os.listdir(args.work):
                 if f.startswith(name):
                     os.remove(os.path.join(args.work, f))
@@ -602,11 +630,17 @@ def real(args):
             '; '.join('%s %g-%g Hz' % (n, b[0], b[1]) for n, (b, _, _) in SPECTRAL_SETS.items()),
             '; '.join('%s from %g s to %g s before the end' % (n, a, e) for n, (_, a, e) in SPECTRAL_SETS.items())))
         print()
-        print('| recording | method | axis | correlation | 4 x std, estimator [m] | 4 x std, frequency domain [m] |')
-        print('|---|---|---|---|---|---|')
-        for name, method, axis, correlation, ours, ref in spectral:
-            print('| %s | %s | %s | %s | %.3f | %.3f |' % (name, method, axis, '-' if math.isnan(correlation)
-                                                              else '%.2f' % correlation, ours, ref))
+        print('RMS difference: of the two displacements; published std: the root of the mean position')
+        print('variance `odometry/wave` gives, outputs held during the calibration window left out (the')
+        print('difference also holds the frequency-domain estimate\'s own error).')
+        print()
+        print('| recording | method | axis | correlation | 4 x std, estimator [m] | 4 x std, frequency domain [m] '
+              '| RMS difference [m] | published std [m] |')
+        print('|---|---|---|---|---|---|---|---|')
+        for name, method, axis, correlation, ours, ref, difference, published in spectral:
+            print('| %s | %s | %s | %s | %.3f | %.3f | %.3f | %s |' % (
+                name, method, axis, '-' if math.isnan(correlation) else '%.2f' % correlation, ours, ref,
+                difference, '-' if math.isnan(published) else '%.3f' % published))
 
 
 def throughput(args):
