@@ -90,15 +90,15 @@ class Bench:
         # Rates and lengths of the ROS side.
         self.paced_s = [10, 5, 5] if self.quick else [30, 20, 10]
         self.max_data_s = 30 if self.quick else 600
-        self.long_bag_s = 600 if self.quick else 3600
+        self.bag_lengths = [600] if self.quick else [600, 3600]  # [s]
         self.memory_s = 7200 if self.quick else 86400
-        self.bag_reps = 1 if self.quick else 3
+        self.bag_reps = {600: 1} if self.quick else {600: 5, 3600: 3}
         self.ros_scenario = os.path.join(REPO, 'config/scenarios/swell_and_wind_sea.yaml')  # 100 Hz, two seas
         with open(self.ros_scenario) as f:  # the scenario's own seed
             self.ros_seed = int(re.search(r'^seed: *(\d+)', f.read(), re.M).group(1))
         self.env = self.setup()
         self.bin = os.path.join(self.ws, 'devel/lib/periodic_bias_compensation')
-        self.bag = None
+        self.bags = {}
 
     def setup(self):
         """scripts/setup (install, build), the benchmark targets, and devel/setup.bash's environment."""
@@ -226,15 +226,15 @@ class Bench:
                                              '--nodelet', 'madgwick', env=madgwick, group='side-by-side'))
         return runs
 
-    def long_bag(self):
-        """The long bag every program of the bag section reads (simulated once per run)."""
-        if not self.bag:
-            self.bag = os.path.join(self.tmp, 'long.bag')
+    def bag(self, seconds):
+        """A bag of SECONDS of the ROS scenario that the bag section reads (simulated once per run)."""
+        if seconds not in self.bags:
+            self.bags[seconds] = os.path.join(self.tmp, 'sea%d.bag' % seconds)
             with open(os.path.join(self.tmp, 'sim.log'), 'w') as f:
                 subprocess.run([self.exe('simulate_imu'), '--scenario', self.ros_scenario, '--duration',
-                                str(self.long_bag_s), '--out', self.bag], env=self.env, stdout=f,
+                                str(seconds), '--out', self.bags[seconds]], env=self.env, stdout=f,
                                stderr=subprocess.STDOUT, check=True)
-        return self.bag
+        return self.bags[seconds]
 
     def timed(self, cmd, rss=None):
         """Wall time of CMD [s]; with RSS (a list), its RSS every 0.5 s as [s, kB]."""
@@ -261,31 +261,40 @@ class Bench:
             raise RuntimeError('%s failed' % cmd[0])
         return wall
 
-    def bag_section(self):
-        log('compensate_bag against a read-only loop on a %d s, 100 Hz bag' % self.long_bag_s)
-        bag = self.long_bag()
-        size = self.output(['du', '-h', bag]).stdout.split()[0]
-        # The long bag every program of this section reads (external nodes on it: add them here).
-        log("robot_localization's node on the same bag")
-        r = self.output([PY, os.path.join(REPO, 'scripts/bench_external.py'), 'throughput', '--bag', bag,
-                         '--robot-localization', self.args.robot_localization or ''])
-        external = {'blocks': parse_blocks(r.stdout.strip('\n')) if r.returncode == 0 and r.stdout.strip() else []}
-        runs, rss = [], []
+    def bag_runs(self, seconds, rss):
+        """Floors and compensate_bag on one bag, alternating, the output removed before each run."""
+        bag = self.bag(seconds)
+        log('compensate_bag against a read-only loop on a %d s, 100 Hz bag (%d repetitions)'
+            % (seconds, self.bag_reps[seconds]))
+        runs = []
         out = os.path.join(self.tmp, 'out.bag')
-        for _ in range(self.bag_reps):
+        for _ in range(self.bag_reps[seconds]):
             for label, extra in (('floor', []), ('whole_bag', ['--whole-bag'])):
                 line = self.output([self.exe('bag_read_floor'), '--in', bag] + extra, check=True).stdout
                 runs.append({'label': label, 'fields': fields(line.strip().split('\n')[-1])})
             messages = int(runs[-1]['fields']['messages'])
-            rss = []  # the last repetition's is plotted
+            del rss[:]  # the last repetition's is plotted
             for label, extra, sample in (('compensate_bag', [], rss),
                                          ('compensate_bag_lz4', ['--compression', 'lz4'], None)):
+                if os.path.exists(out):
+                    os.remove(out)
                 wall = float('%.2f' % self.timed([self.exe('compensate_bag'), '--in', bag, '--out', out] + extra,
                                                  sample))
                 runs.append({'label': label, 'fields': {'messages': str(messages), 'wall_s': '%.2f' % wall,
                                                         'messages_per_s': '%g' % (messages / max(wall, 0.01))}})
-        return {'seed': self.ros_seed, 'long_bag_s': self.long_bag_s, 'bag_size': size, 'reps': self.bag_reps,
-                'runs': runs, 'rss': rss, 'external': external}
+        size = self.output(['du', '-h', bag]).stdout.split()[0]
+        return {'seconds': seconds, 'size': size, 'reps': self.bag_reps[seconds], 'runs': runs}
+
+    def bag_section(self):
+        longest = self.bag(max(self.bag_lengths))
+        # The longest bag is the one external nodes read too (add them here).
+        log("robot_localization's node on the %d s bag" % max(self.bag_lengths))
+        r = self.output([PY, os.path.join(REPO, 'scripts/bench_external.py'), 'throughput', '--bag', longest,
+                         '--robot-localization', self.args.robot_localization or ''])
+        external = {'blocks': parse_blocks(r.stdout.strip('\n')) if r.returncode == 0 and r.stdout.strip() else []}
+        rss = []  # compensate_bag's RSS in its last run on the longest bag
+        bags = [self.bag_runs(seconds, rss) for seconds in self.bag_lengths]
+        return {'seed': self.ros_seed, 'bags': bags, 'rss': rss, 'external': external}
 
     def memory(self):
         self.start_master()

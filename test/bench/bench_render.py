@@ -122,8 +122,8 @@ def values(name, results, plots_dir):
             bench_report.nodelet_plot(s['runs'], os.path.join(plots_dir, 'nodelet_latency.png'))
     elif name == 'bag':
         core = results.get('sections', {}).get('core-speed', {}).get('rows', [])
-        v.update(seed=s['seed'], long_bag_s=s['long_bag_s'], bag_size=s['bag_size'],
-                 tables=bench_report.bag_markdown(s['runs'], core).strip('\n'))
+        v.update(seed=s['seed'], bags=bench_report.bag_list(s['bags']),
+                 tables=bench_report.bag_markdown(s['bags'], core).strip('\n'))
         ext = s.get('external')
         if ext and ext.get('blocks'):
             v['external'] = (

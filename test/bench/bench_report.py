@@ -103,30 +103,46 @@ def nodelet_plot(runs, png):
     fig.savefig(png, dpi=110)
 
 
-def bag_markdown(bag_runs, core_rows):
-    out = []
-    print = lambda *a: out.append(a[0] if a else '')
+def _bag_runs(bag):
+    """The bag's runs by label, and their median messages per second and wall time."""
     runs = {'floor': [], 'whole_bag': [], 'compensate_bag': [], 'compensate_bag_lz4': []}
-    for r in bag_runs:
+    for r in bag['runs']:
         runs[r['label']].append(r['fields'])
-    messages = int(runs['floor'][0]['messages'])
     rate = {k: statistics.median(float(r['messages_per_s']) for r in v) for k, v in runs.items() if v}
     wall = {k: statistics.median(float(r['wall_s']) for r in v) for k, v in runs.items() if v}
-    print('| program | IMU messages | wall time [s] (median of %d) | IMU messages per second '
-          '| ratio to the IMU-topic floor | ratio to the whole-bag floor |' % len(runs['floor']))
-    print('|---|---|---|---|---|---|')
-    rows = [('read-only floor, IMU topic (`bag_read_floor`)', 'floor'),
-            ('read-only floor, whole bag (`bag_read_floor --whole-bag`)', 'whole_bag'),
-            ('`compensate_bag`', 'compensate_bag'),
-            ('`compensate_bag --compression lz4`', 'compensate_bag_lz4')]
-    for title, key in rows:
-        if key not in rate:
-            continue
-        ratio = lambda floor: '%.1f' % (rate[floor] / rate[key]) if floor in rate else '-'
-        print('| %s | %d | %.2f | %.3g | %s | %s |' % (title, messages, wall[key], rate[key], ratio('floor'),
-                                                    ('**%s**' if key.startswith('compensate_bag') else '%s') % ratio('whole_bag')))
-    print()
-    # The core against both floors: reading an in-memory array and reading the bag.
+    return int(runs['floor'][0]['messages']), rate, wall
+
+
+def bag_list(bags):
+    """'600 s (154M) and 3600 s (925M)': the bags' lengths and sizes."""
+    items = ['%d s (%s)' % (b['seconds'], b['size']) for b in bags]
+    return ' and '.join(items) if len(items) < 3 else ', '.join(items[:-1]) + ' and ' + items[-1]
+
+
+def bag_markdown(bags, core_rows):
+    out = []
+    print = lambda *a: out.append(a[0] if a else '')
+    for bag in bags:
+        messages, rate, wall = _bag_runs(bag)
+        print('%d s bag:' % bag['seconds'])
+        print()
+        print('| program | IMU messages | wall time [s] (median of %d) | IMU messages per second '
+              '| ratio to the IMU-topic floor | ratio to the whole-bag floor |' % bag['reps'])
+        print('|---|---|---|---|---|---|')
+        rows = [('read-only floor, IMU topic (`bag_read_floor`)', 'floor'),
+                ('read-only floor, whole bag (`bag_read_floor --whole-bag`)', 'whole_bag'),
+                ('`compensate_bag`', 'compensate_bag'),
+                ('`compensate_bag --compression lz4`', 'compensate_bag_lz4')]
+        for title, key in rows:
+            if key not in rate:
+                continue
+            ratio = lambda floor: '%.1f' % (rate[floor] / rate[key]) if floor in rate else '-'
+            print('| %s | %d | %.2f | %.3g | %s | %s |' % (
+                title, messages, wall[key], rate[key], ratio('floor'),
+                ('**%s**' if key.startswith('compensate_bag') else '%s') % ratio('whole_bag')))
+        print()
+    # The core against both floors of the longest bag: reading an in-memory array and reading the bag.
+    messages, rate, wall = _bag_runs(bags[-1])
     core = {r['name']: r['items'] for r in core_rows if r['items']}
     print('| core benchmark | samples per second | ns per sample | ratio to the in-memory floor | ratio to the bag floor |')
     print('|---|---|---|---|---|')
@@ -141,14 +157,15 @@ def bag_markdown(bag_runs, core_rows):
     core_rate = core.get('compensate/moored_sea_state_4_default')
     if core_rate and 'compensate_bag' in wall:
         core_s = messages / core_rate
-        print('Where `compensate_bag`\'s time goes: the core (default mode, at the benchmark\'s rate above) '
-              'accounts for %.2f s of its %.2f s (%.0f %%), reading the whole bag for %.2f s (%.0f %%); the rest '
-              'is the structure pre-check (one more read of the file), building the three output messages and '
-              'appending six records per IMU sample (three outputs, three ground-truth messages copied as bytes) '
-              'to in-memory chunks written with one call each (`BagWriter`); with `--compression lz4` the '
-              'chunks are also compressed, by a thread of the writer.' % (core_s, wall['compensate_bag'], 100 * core_s / wall['compensate_bag'],
-                         wall.get('whole_bag', float('nan')),
-                         100 * wall.get('whole_bag', float('nan')) / wall['compensate_bag']))
+        print('Where `compensate_bag`\'s time goes on the %d s bag: the core (default mode, at the benchmark\'s '
+              'rate above) accounts for %.2f s of its %.2f s (%.0f %%), reading the whole bag for %.2f s (%.0f %%); '
+              'the rest is the structure pre-check (one more read of the file), building the three output messages '
+              'and appending six records per IMU sample (three outputs, three ground-truth messages copied as '
+              'bytes) to in-memory chunks written with one call each (`BagWriter`); with `--compression lz4` the '
+              'chunks are also compressed, by a thread of the writer.' % (
+                  bags[-1]['seconds'], core_s, wall['compensate_bag'], 100 * core_s / wall['compensate_bag'],
+                  wall.get('whole_bag', float('nan')),
+                  100 * wall.get('whole_bag', float('nan')) / wall['compensate_bag']))
         print()
     return '\n'.join(out)
 

@@ -24,8 +24,8 @@ def properties(path):
 
 
 def seeds(values, prefix):
-    return [values[k] for k in sorted(values, key=lambda k: int(k.rsplit('_', 1)[1]))
-            if k.startswith(prefix) and k[len(prefix):].isdigit()]
+    keys = [k for k in values if k.startswith(prefix) and k[len(prefix):].isdigit()]
+    return [values[k] for k in sorted(keys, key=lambda k: int(k[len(prefix):]))]
 
 
 def markdown(tests):

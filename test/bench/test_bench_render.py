@@ -105,10 +105,16 @@ class RenderTest(unittest.TestCase):
         self.assertIn('maximum sustained without drops: 26669 msg/s', self.md)
         self.assertIn('Closed-loop rate, intra-process / separate process: **5.85**', self.md)
         bag = self.sections['bag']
-        self.assertIn('A %d s bag of `swell_and_wind_sea` (seed %d)' % (bag['long_bag_s'], bag['seed']), self.md)
-        self.assertIn('(%s, IMU and' % bag['bag_size'], self.md)
-        for run in bag['runs']:
-            self.assertIn('| %s | %s |' % (run['fields']['messages'], run['fields']['wall_s']), self.md)
+        self.assertIn('Bags of `swell_and_wind_sea` (seed %d) at 100 Hz from `simulate_imu`, 600 s (154M) and '
+                      '3600 s (925M), with' % bag['seed'], self.md)
+        for each in bag['bags']:
+            self.assertIn('%d s bag:' % each['seconds'], self.md)
+            for run in each['runs']:
+                self.assertIn('| %s | %s |' % (run['fields']['messages'], run['fields']['wall_s']), self.md)
+        # Ratios of the medians, per bag: 428571 / 71428.6 and 363636 / 70175.4 (its whole-bag floor).
+        self.assertIn('| `compensate_bag` | 60000 | 0.84 | 7.14e+04 | 6.0 |', self.md)
+        self.assertIn('| `compensate_bag` | 360000 | 5.13 | 7.02e+04 | 6.3 | **5.2** |', self.md)
+        self.assertIn("time goes on the 3600 s bag", self.md)
         self.assertIn("robot_localization's node: not measured", self.md)
         memory = self.sections['memory']
         self.assertIn('fed %d h of' % (memory['memory_s'] // 3600), self.md)
