@@ -251,15 +251,26 @@ def write_odometry(msgs, out):
 
 
 def commit_of(devel, package):
-    """The short commit of PACKAGE's sources beside DEVEL (a catkin workspace's src/), if known."""
-    src = os.path.join(os.path.dirname(os.path.abspath(devel)), 'src')
-    for root, dirs, files in os.walk(src):
+    """The short commit of PACKAGE's sources beside DEVEL (a catkin workspace's src/), if known: from
+    their git checkout, else from the line "PACKAGE COMMIT" of COMMITS.txt in the workspace (sources
+    copied without their history); "unknown" otherwise."""
+    workspace = os.path.dirname(os.path.abspath(devel))
+    for root, dirs, files in os.walk(os.path.join(workspace, 'src')):
         if 'package.xml' in files and '<name>%s</name>' % package in open(os.path.join(root, 'package.xml')).read():
             r = subprocess.run(['git', '-C', root, 'log', '-1', '--format=%h (%cd)', '--date=short'],
                                stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
-            return r.stdout.strip() or 'unknown commit'
+            if r.returncode == 0 and r.stdout.strip():
+                return r.stdout.strip()
+            break
         dirs[:] = [d for d in dirs if not d.startswith('.')]
-    return 'unknown commit'
+    listed = os.path.join(workspace, 'COMMITS.txt')
+    if os.path.exists(listed):
+        with open(listed) as f:
+            for line in f:
+                fields = line.split()
+                if len(fields) >= 2 and fields[0] == package:
+                    return fields[1][:7]
+    return 'unknown'
 
 
 def accuracy(args):
