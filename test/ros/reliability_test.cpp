@@ -209,11 +209,10 @@ TEST(Reliability, ExtremeValidGainsWhileDataFlowsStayBounded)
       }
     }
     const double rate = 87.7;
-    // Judged after the calibration window: during it the bias is the running mean of moving data
+    // Judged after the calibration window: during it the bias is the running mean of moving data,
     // and paper mode's start-up excursion, with the gains switched to a corner at 5 s, reaches
-    // 2.4 m (measured; 1.05 m while a false period lock at 4 s, since fixed, started the loop
-    // earlier). Bounded means: under 2 m after the window, and no larger in the second half of
-    // that time than in the first (no growth).
+    // metres. Bounded means: under 2 m after the window, and no larger in the second half of that
+    // time than in the first (no growth).
     const std::size_t calibrated_from = static_cast<std::size_t>(config.calibration_duration * rate);
     const std::size_t half = (calibrated_from + r.samples.size()) / 2;
     double max_position = 0.0, max_first_half = 0.0;

@@ -13,8 +13,8 @@
 // wave amplitude at 20 x the corner frequency.
 //
 // Start: a filter started from rest reads the ship's heave velocity at the first sample (tens of
-// cm/s) and the calibration error of the bias as a step, and rings for minutes (on a 30 min
-// moored record started from rest: 16-60 % of Hs of error). Every such start is a sum of the
+// cm/s) and the calibration error of the bias as a step, and rings for minutes (measured in
+// docs/benchmarks.md, "Heave filter start"). Every such start is a sum of the
 // filter's free responses, which span (w t)^k exp(-w t), k = 0..3. The filter therefore runs from
 // rest, and the combination of free responses that best explains its output so far (least
 // squares over every sample since the start) is taken off: a wave has no such slowly decaying
