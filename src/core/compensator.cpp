@@ -151,6 +151,7 @@ struct AxisEstimator
 
   double d_v = 0.0, d_p = 0.0;  ///< drift terms of either mode, as published
   double time_since_reset = 0.0;
+  double slow_start = -INFINITY;  ///< when the slow channel last started at zero [s]
 };
 
 class CompensatorImpl
@@ -476,6 +477,7 @@ private:
       axis.wave.reset(config_.harmonics);
       axis.frequency_drift.clear();
       axis.drift.restartMotion();
+      axis.slow_start = now_;
       axis.residual_variance = 0.0;
       axis.broadband = BroadbandWave(&axis == &axes_[2], config_.heave_corner_frequency, config_.min_frequency);
       axis.paper.reset();
@@ -542,6 +544,7 @@ private:
       for (int i = 0; i < 3; ++i)
       {
         axes_[i].drift.restartPosition();
+        axes_[i].slow_start = now_;
         out->position_filtered[i] = out->velocity_filtered[i] = 0.0;
       }
   }
@@ -655,8 +658,12 @@ private:
     if (jump)
     {
       axis.frequency_drift.clear();
-      axis.wave.start(axis.frequency, rate_, config_.harmonic_memory, config_.harmonics,
-                      config_.mode == Mode::kDefault);
+      axis.wave.start(axis.frequency, rate_, config_.harmonic_memory, config_.harmonics, config_.mode == Mode::kDefault,
+                      now_ - axis.slow_start);
+      // The slow channel integrated the wave while nothing modelled it: the new model takes that
+      // velocity over, by its share of the wave output.
+      const double broadband = config_.heave_filter && config_.enable_periodic ? axis.broadband.weight() : 0.0;
+      axis.drift.shiftVelocity(-(1.0 - broadband) * axis.wave.startVelocity());
     }
     axis.frequency_drift.add(now_, axis.frequency, span, whole_span, config_.fft_hop);
   }

@@ -14,12 +14,14 @@ void PeriodicWave::reset(int harmonics)
   history_.clear();
 }
 
-void PeriodicWave::start(double frequency, double rate, double memory, int harmonics, bool fit_history)
+void PeriodicWave::start(double frequency, double rate, double memory, int harmonics, bool fit_history,
+                         double slow_span)
 {
   retire();
   model_.reset(harmonics);
   phase_ = 0.0;
   frequency_ = frequency;
+  start_velocity_ = 0.0;
   if (!fit_history || rate <= 0.0)
     return;
   const double step = 2.0 * M_PI * frequency / rate;
@@ -29,6 +31,17 @@ void PeriodicWave::start(double frequency, double rate, double memory, int harmo
   // The newest kept sample (lag 1) is the previous one, at phase 0.
   for (int lag = count; lag >= 1; --lag)
     model_.update(-(lag - 1) * step, history_.ago(lag), lambda);
+  if (previous_weight_ > 0.0 || model_.updates() < rate / frequency)
+    return;
+  const double omega = 2.0 * M_PI * frequency;
+  double a = 0.0, x = 0.0, v = 0.0, unused = 0.0, unused_too = 0.0;
+  model_.evaluate(0.0, omega, &a, &x, &v, &unused, &unused_too);
+  start_velocity_ = v;
+  if (slow_span < 1.0 / frequency)
+  {
+    model_.evaluate(-omega * slow_span, omega, &a, &x, &v, &unused, &unused_too);
+    start_velocity_ -= v;
+  }
 }
 
 void PeriodicWave::retire()

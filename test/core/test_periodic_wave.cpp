@@ -23,6 +23,10 @@ double displacement(double t)
 {
   return -acceleration(t) / (kOmega * kOmega);
 }
+double velocity(double t)
+{
+  return -kAmplitude * std::cos(kOmega * t + 0.4) / kOmega;
+}
 
 /// A model locked at kFrequency from the first sample on, fed `samples` samples of the wave;
 /// *last: its last position [m].
@@ -75,6 +79,32 @@ TEST(PeriodicWave, StartsFromItsHistory)
   ASSERT_TRUE(out.ready);
   EXPECT_NEAR(out.position, displacement(i * dt), 0.01 * kAmplitude / (kOmega * kOmega));
   EXPECT_NEAR(out.residual, 0.0, 0.01 * kAmplitude);
+}
+
+// The velocity a new model takes over from the slow channel: the wave's at the previous sample when
+// the slow channel started long ago, less the wave's at that start when it was within a period;
+// nothing while an older model fades into the new one.
+TEST(PeriodicWave, StartVelocityIsWhatTheSlowChannelIntegrated)
+{
+  const double dt = 1.0 / kRate;
+  const int n = static_cast<int>(30.0 * kRate);
+  const double tolerance = 0.01 * kAmplitude / kOmega;
+  const double last = (n - 1) * dt;  // the previous sample's time at start()
+  for (const double span : { double(INFINITY), 100.0, 3.0 })
+  {
+    PeriodicWave wave;
+    wave.setCapacity(1000);
+    wave.reset(1);
+    for (int i = 0; i < n; ++i)
+      wave.push(acceleration(i * dt));
+    wave.start(kFrequency, kRate, kMemory, 1, true, span);
+    const double expected = span < 1.0 / kFrequency ? velocity(last) - velocity(last - span) : velocity(last);
+    EXPECT_NEAR(wave.startVelocity(), expected, tolerance) << span;
+  }
+  double unused = 0.0;
+  PeriodicWave moved = lockedWave(n, &unused);
+  moved.start(2.0 * kFrequency, kRate, kMemory, 1, true);
+  EXPECT_EQ(moved.startVelocity(), 0.0);
 }
 
 // A lost lock: its model, extrapolated, fades with kFadeTime into the estimate it is blended with

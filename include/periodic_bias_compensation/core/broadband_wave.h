@@ -89,6 +89,11 @@ public:
   void configure(double corner_frequency, double min_frequency);
 
   BroadbandWaveOutput update(const BroadbandWaveInput& in);
+  /// The last update's share of the wave output [-].
+  double weight() const
+  {
+    return weight_;
+  }
 
   /// White-noise density of the acceleration squared, one-sided, from first differences
   /// [(m/s^2)^2/Hz] at `rate`.

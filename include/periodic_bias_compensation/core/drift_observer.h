@@ -64,6 +64,11 @@ public:
   {
     p_ = v_ = bias_rate_ = 0.0;
   }
+  /// The velocity changes by dv [m/s] (motion handed to or taken from the wave channel).
+  void shiftVelocity(double dv)
+  {
+    v_ += dv;
+  }
   /// Position and velocity restart at zero; the bias and its rate are kept.
   void restartPosition()
   {

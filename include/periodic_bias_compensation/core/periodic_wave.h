@@ -14,6 +14,8 @@
 // Threading: not thread-safe; the owner serialises calls.
 #pragma once
 
+#include <cmath>
+
 #include "periodic_bias_compensation/core/harmonic_model.h"
 
 namespace periodic_bias_compensation
@@ -47,7 +49,20 @@ public:
   /// A new lock at `frequency` [Hz]: the current model (if it has seen a period) fades out at its
   /// own frequency, a new one starts, fitted to the history when fit_history (sample rate `rate`
   /// [Hz], memory [s]).
-  void start(double frequency, double rate, double memory, int harmonics, bool fit_history);
+  void start(double frequency, double rate, double memory, int harmonics, bool fit_history,
+             double slow_span = INFINITY);
+  /// The wave velocity [m/s] that the slow channel integrated while nothing modelled the wave, as
+  /// the model fitted at the last start() describes it: its velocity at the previous sample, less
+  /// its velocity `slow_span` [s] before when the slow channel started at zero less than a period
+  /// ago (an older start the model, fitted to the recent past, does not describe). Zero when the
+  /// model needs a period to describe the wave or an older model fades into it (the blend hands
+  /// over then). The slow channel gives it up (DriftObserver::shiftVelocity), so that slow plus
+  /// wave stays the integral of the measurement: a model fitted to motion that has just stopped
+  /// leaves no ramp in it.
+  double startVelocity() const
+  {
+    return start_velocity_;
+  }
   /// The lock was lost: its model fades out, extrapolated at the frequency it last followed.
   void retire();
 
@@ -68,8 +83,9 @@ private:
   HarmonicEstimator model_;
   bool ready_ = false;  ///< model_ has described a period: its output is used
   double phase_ = 0.0;
-  double frequency_ = 0.0;      ///< the frequency model_ last followed [Hz]
-  HarmonicEstimator previous_;  ///< the model of a lock that changed or was lost
+  double frequency_ = 0.0;       ///< the frequency model_ last followed [Hz]
+  double start_velocity_ = 0.0;  ///< startVelocity()
+  HarmonicEstimator previous_;   ///< the model of a lock that changed or was lost
   double previous_frequency_ = 0.0, previous_phase_ = 0.0, previous_weight_ = 0.0;
   SignalHistory history_;  ///< the model's input
 };
