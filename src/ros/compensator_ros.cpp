@@ -10,6 +10,7 @@
 
 #include <geometry_msgs/TransformStamped.h>
 #include <nav_msgs/Path.h>
+#include <boost/make_shared.hpp>
 
 #include "periodic_bias_compensation/core/calibration_file.h"
 #include "periodic_bias_compensation/ros/mounting.h"
@@ -292,10 +293,16 @@ void CompensatorRos::publishOutputs(const sensor_msgs::Imu& msg, const Compensat
 {
   const ros::Time& stamp = msg.header.stamp;
   const OdometryFrames frames{ params_.ros.odom_frame, params_.ros.base_frame };
-  const nav_msgs::Odometry filtered = toOdometry(out, OdometryKind::kFiltered, msg, mounting_, frames, stamp);
-  const nav_msgs::Odometry wave = toOdometry(out, OdometryKind::kWave, msg, mounting_, frames, stamp);
-  const BiasState bias = toBiasState(out, compensator_->config().mode, params_.ros.odom_frame, stamp);
-  if (!allFinite(filtered) || !allFinite(wave) || !allFinite(bias) || !out.acceleration_level.allFinite())
+  // Published as shared pointers: a subscriber in the same process (a nodelet) gets them from this
+  // thread without a copy; a message published by value would be serialized and handed over by
+  // roscpp's poll thread, a thread wake-up more per message.
+  const auto filtered =
+      boost::make_shared<nav_msgs::Odometry>(toOdometry(out, OdometryKind::kFiltered, msg, mounting_, frames, stamp));
+  const auto wave =
+      boost::make_shared<nav_msgs::Odometry>(toOdometry(out, OdometryKind::kWave, msg, mounting_, frames, stamp));
+  const auto bias =
+      boost::make_shared<BiasState>(toBiasState(out, compensator_->config().mode, params_.ros.odom_frame, stamp));
+  if (!allFinite(*filtered) || !allFinite(*wave) || !allFinite(*bias) || !out.acceleration_level.allFinite())
   {
     ++counters_.nonfinite_outputs;
     ROS_ERROR_THROTTLE(kWarnPeriod, "estimator output at t = %.3f s is not finite: not published (%" PRIu64 " so far)",
@@ -308,12 +315,12 @@ void CompensatorRos::publishOutputs(const sensor_msgs::Imu& msg, const Compensat
   if (tf_broadcaster_)
   {
     geometry_msgs::TransformStamped tf;
-    tf.header = filtered.header;
-    tf.child_frame_id = filtered.child_frame_id;
-    tf.transform.translation.x = filtered.pose.pose.position.x;
-    tf.transform.translation.y = filtered.pose.pose.position.y;
-    tf.transform.translation.z = filtered.pose.pose.position.z;
-    tf.transform.rotation = filtered.pose.pose.orientation;
+    tf.header = filtered->header;
+    tf.child_frame_id = filtered->child_frame_id;
+    tf.transform.translation.x = filtered->pose.pose.position.x;
+    tf.transform.translation.y = filtered->pose.pose.position.y;
+    tf.transform.translation.z = filtered->pose.pose.position.z;
+    tf.transform.rotation = filtered->pose.pose.orientation;
     tf_broadcaster_->sendTransform(tf);
   }
   has_output_ = true;

@@ -253,7 +253,8 @@ public:
               << " rate=" << options_.rate << " sent=" << sent_ << " received=" << received_
               << " dropped=" << sent_ - received_ << " send_wall_s=" << wall
               << " input_rate=" << static_cast<double>(sent_) / wall << " p50_us=" << latency_.quantile(0.5) * 1e6
-              << " p99_us=" << latency_.quantile(0.99) * 1e6 << " max_us=" << max_latency_ * 1e6
+              << " p99_us=" << latency_.quantile(0.99) * 1e6 << " p999_us=" << latency_.quantile(0.999) * 1e6
+              << " max_us=" << max_latency_ * 1e6 << " max_at_s=" << max_at_
               << " cpu_us_per_msg=" << cpu_per_message * 1e6 << " rss_kb=" << rssKilobytes()
               << " nodelet=" << options_.nodelet << std::endl;
     if (!options_.rss_csv.empty())
@@ -352,7 +353,11 @@ private:
       const double latency =
           std::chrono::duration<double>(now - published_[static_cast<std::size_t>(k) % kRing]).count();
       latency_.add(latency);
-      max_latency_ = std::max(max_latency_, latency);
+      if (latency > max_latency_)
+      {
+        max_latency_ = latency;
+        max_at_ = static_cast<double>(k) / options_.rate;
+      }
     }
     ++received_;
     if (options_.rss_every > 0 && received_ % options_.rss_every == 0 && !options_.rss_csv.empty())
@@ -384,6 +389,7 @@ private:
   double cpu_start_ = 0.0;  ///< processCpuSeconds() when the first input was sent
   Histogram latency_;
   double max_latency_ = 0.0;
+  double max_at_ = 0.0;  ///< data time of the slowest output [s]
   std::vector<RssRow> rss_;
 };
 
