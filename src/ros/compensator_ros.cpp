@@ -137,7 +137,13 @@ CompensatorRos::CompensatorRos(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh
            imu_sub_.getTopic().c_str(), filtered_pub_.getTopic().c_str(), wave_pub_.getTopic().c_str());
 }
 
-CompensatorRos::~CompensatorRos() = default;
+CompensatorRos::~CompensatorRos()
+{
+  if (listener_release_.joinable())
+  {
+    listener_release_.join();
+  }
+}
 
 void CompensatorRos::imuCallback(const sensor_msgs::Imu::ConstPtr& msg)
 {
@@ -285,8 +291,15 @@ bool CompensatorRos::updateMounting(const sensor_msgs::Imu& msg)
 void CompensatorRos::releaseTransformListener()
 {
   // The mounting is looked up once. Listening on after that would only cost a thread wake-up per
-  // message of /tf, this node's own transform among them (one per IMU sample).
-  tf_listener_.reset();
+  // message of /tf, this node's own transform among them (one per IMU sample). Destroying the
+  // listener joins its thread, which takes milliseconds: done on a thread of its own, not in the
+  // IMU callback.
+  if (!tf_listener_ || listener_release_.joinable())
+  {
+    tf_listener_.reset();
+    return;
+  }
+  listener_release_ = std::thread([listener = std::move(tf_listener_)]() mutable { listener.reset(); });
 }
 
 void CompensatorRos::publishOutputs(const sensor_msgs::Imu& msg, const CompensatorOutput& out, SampleStatus status)

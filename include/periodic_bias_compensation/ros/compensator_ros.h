@@ -7,6 +7,7 @@
 #include <functional>
 #include <memory>
 #include <string>
+#include <thread>
 
 #include <diagnostic_updater/diagnostic_updater.h>
 #include <dynamic_reconfigure/server.h>
@@ -110,6 +111,7 @@ private:
   double first_stamp_ = -1.0;      ///< stamp of the first message [s], for mount_timeout
   tf2_ros::Buffer tf_buffer_;
   std::unique_ptr<tf2_ros::TransformListener> tf_listener_;  ///< until the mounting is decided
+  std::thread listener_release_;                             ///< destroys tf_listener_ (releaseTransformListener)
   std::unique_ptr<tf2_ros::TransformBroadcaster> tf_broadcaster_;
 
   ros::Subscriber imu_sub_;
