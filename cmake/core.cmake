@@ -22,7 +22,9 @@ add_library(${PROJECT_NAME}_core
   src/core/periodic_wave.cpp
   src/core/raw_integrator.cpp)
 target_include_directories(${PROJECT_NAME}_core PUBLIC include)
-target_link_libraries(${PROJECT_NAME}_core PUBLIC Eigen3::Eigen PkgConfig::FFTW3 yaml-cpp)
+# FrequencyTracker plans its transform on a thread of its own.
+find_package(Threads REQUIRED)
+target_link_libraries(${PROJECT_NAME}_core PUBLIC Eigen3::Eigen PkgConfig::FFTW3 yaml-cpp Threads::Threads)
 
 if(CATKIN_ENABLE_TESTING)
   catkin_add_gtest(test_core

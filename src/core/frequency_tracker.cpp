@@ -2,6 +2,10 @@
 
 #include "real_fft.h"
 
+#include <sys/resource.h>
+#include <sys/syscall.h>
+#include <unistd.h>
+
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
@@ -36,11 +40,24 @@ FrequencyTracker::FrequencyTracker(int window_samples, double sample_rate, int d
   ring_.assign(n_, 0.0);
   times_.assign(n_, 0.0);
   fft_size_ = fastFftSize(n_);
-  plan_ = std::make_unique<Plan>(fft_size_);
-  plan_->power.resize(fft_size_ / 2 + 1);
+  planning_ = std::async(std::launch::async, [size = fft_size_] {
+    // At the lowest priority, so that it does not take the core from the thread that feeds the
+    // samples (the first analysis, a hop later, is the first to need the plan).
+    setpriority(PRIO_PROCESS, static_cast<id_t>(syscall(SYS_gettid)), 19);
+    auto plan = std::make_unique<Plan>(size);
+    plan->power.resize(size / 2 + 1);
+    return plan;
+  });
 }
 
 FrequencyTracker::~FrequencyTracker() = default;
+
+FrequencyTracker::Plan& FrequencyTracker::plan()
+{
+  if (!plan_)
+    plan_ = planning_.get();
+  return *plan_;
+}
 
 void FrequencyTracker::push(double value)
 {
@@ -144,28 +161,29 @@ FrequencyEstimate FrequencyTracker::analyse(double f_min, double f_max, double m
   // A (numerically) constant signal has no period, whatever its rounding noise looks like.
   if (variance / available <= 1e-18 * (1.0 + mean * mean))
     return estimate;
-  if (plan_->window_length != available)
+  Plan& planned = plan();
+  if (planned.window_length != available)
   {
     // cos(2 pi (i + 1/2) / N) by rotation: the window is rebuilt at every hop while the ring
     // fills, and N cos() calls would cost more than the FFT.
-    plan_->window.resize(available);
-    plan_->window_sum = 0.0;
+    planned.window.resize(available);
+    planned.window_sum = 0.0;
     const double step = 2.0 * M_PI / available;
     const double cos_step = std::cos(step), sin_step = std::sin(step);
     double c = std::cos(0.5 * step), s = std::sin(0.5 * step);
     for (int i = 0; i < available; ++i)
     {
-      plan_->window[i] = 0.5 - 0.5 * c;
-      plan_->window_sum += plan_->window[i];
+      planned.window[i] = 0.5 - 0.5 * c;
+      planned.window_sum += planned.window[i];
       const double next_c = c * cos_step - s * sin_step;
       s = s * cos_step + c * sin_step;
       c = next_c;
     }
-    plan_->window_length = available;
+    planned.window_length = available;
   }
-  const double window_sum = plan_->window_sum;
-  const double* window = plan_->window.data();
-  double* in = plan_->fft.in;
+  const double window_sum = planned.window_sum;
+  const double* window = planned.window.data();
+  double* in = planned.fft.in;
   for (int p = 0; p < 2; ++p)
   {
     for (int i = 0; i < lengths[p]; ++i)
@@ -173,8 +191,8 @@ FrequencyEstimate FrequencyTracker::analyse(double f_min, double f_max, double m
     in += lengths[p];
     window += lengths[p];
   }
-  std::fill(plan_->fft.in + available, plan_->fft.in + fft_size_, 0.0);
-  plan_->fft.execute();
+  std::fill(planned.fft.in + available, planned.fft.in + fft_size_, 0.0);
+  planned.fft.execute();
 
   const double elapsed = times_[(head_ - 1 + n_) % n_] - times_[(head_ - available + n_) % n_];
   const double rate = elapsed > 0.0 ? (available - 1) / elapsed : rate_;
@@ -190,36 +208,36 @@ FrequencyEstimate FrequencyTracker::analyse(double f_min, double f_max, double m
     return estimate;
   // Power only where it is read: the band and one bin either side (interpolation).
   for (int k = k_lo - 1; k <= k_hi + 1; ++k)
-    plan_->power[k] = plan_->fft.power(k);
+    planned.power[k] = planned.fft.power(k);
 
   int k_peak = k_lo;
   for (int k = k_lo; k <= k_hi; ++k)
-    if (plan_->power[k] > plan_->power[k_peak])
+    if (planned.power[k] > planned.power[k_peak])
       k_peak = k;
 
-  auto& band = plan_->band_power;
-  band.assign(plan_->power.begin() + k_lo, plan_->power.begin() + k_hi + 1);
+  auto& band = planned.band_power;
+  band.assign(planned.power.begin() + k_lo, planned.power.begin() + k_hi + 1);
   const double median = upperMedian(band.begin(), band.end());
-  estimate.peak_ratio = median > 0.0 ? plan_->power[k_peak] / median : 0.0;
+  estimate.peak_ratio = median > 0.0 ? planned.power[k_peak] / median : 0.0;
 
   // Gaussian (log-parabolic) interpolation: nearly unbiased for a Hann-windowed sinusoid.
   double offset = 0.0;
   if (k_peak > 0 && k_peak < bins - 1)
   {
-    const double a = std::log(std::max(plan_->power[k_peak - 1], 1e-300));
-    const double b = std::log(std::max(plan_->power[k_peak], 1e-300));
-    const double c = std::log(std::max(plan_->power[k_peak + 1], 1e-300));
+    const double a = std::log(std::max(planned.power[k_peak - 1], 1e-300));
+    const double b = std::log(std::max(planned.power[k_peak], 1e-300));
+    const double c = std::log(std::max(planned.power[k_peak + 1], 1e-300));
     const double denominator = a - 2.0 * b + c;
     if (denominator < 0.0)
       offset = std::clamp(0.5 * (a - c) / denominator, -0.5, 0.5);
   }
   estimate.frequency = (k_peak + offset) * df;
   // Amplitude of a sinusoid from the peak of a Hann window (coherent gain = window_sum).
-  estimate.amplitude = 2.0 * std::sqrt(plan_->power[k_peak]) / window_sum;
+  estimate.amplitude = 2.0 * std::sqrt(planned.power[k_peak]) / window_sum;
   // A band-edge bin lower than its neighbour outside the band is the skirt of a line below the
   // band (a period that does not fit three times in the data yet), not a peak.
   const bool local_maximum =
-      plan_->power[k_peak] >= plan_->power[k_peak - 1] && plan_->power[k_peak] >= plan_->power[k_peak + 1];
+      planned.power[k_peak] >= planned.power[k_peak - 1] && planned.power[k_peak] >= planned.power[k_peak + 1];
   estimate.locked = local_maximum && estimate.peak_ratio >= min_peak_ratio && estimate.frequency >= f_lo &&
                     estimate.frequency <= f_max;
   return estimate;

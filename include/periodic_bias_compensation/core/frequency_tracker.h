@@ -1,6 +1,7 @@
 // Dominant-frequency estimation with FFTW3 over a sliding window (estimation core, no ROS).
 #pragma once
 
+#include <future>
 #include <memory>
 #include <vector>
 
@@ -15,7 +16,10 @@ struct FrequencyEstimate
   double amplitude = 0.0;   ///< amplitude of the dominant sinusoid after the decimation filter [signal units]
 };
 
-/// Sliding-window FFT of one signal. The FFTW plan is made once per window size and reused.
+/// Sliding-window FFT of one signal. The FFTW plan is made once per window size and reused; it is
+/// made on a thread of its own, started by the constructor (FFTW plans a size it has not seen in
+/// milliseconds, too long for the sample that first gives the rate), and waited for by the first
+/// analysis if it is not ready by then.
 /// push() is O(1); analyse() costs one real FFT of the window (call it every hop, not every
 /// sample).
 ///
@@ -71,6 +75,7 @@ public:
 
 private:
   struct Plan;
+  Plan& plan();                           ///< plan_, once planned
   void store(double value, double t);     ///< into the window (decimated rate)
   void decimate(double value, double t);  ///< through the anti-alias filter
 
@@ -92,6 +97,7 @@ private:
   int head_ = 0;
   long count_ = 0;
   std::unique_ptr<Plan> plan_;
+  std::future<std::unique_ptr<Plan>> planning_;  ///< plan_ until it is taken
 };
 
 }  // namespace periodic_bias_compensation
