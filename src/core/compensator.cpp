@@ -10,10 +10,13 @@
 #include "periodic_bias_compensation/core/parameter_table.h"
 #include "periodic_bias_compensation/core/periodic_wave.h"
 #include "periodic_bias_compensation/core/turn_detector.h"
+#include "real_fft.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <deque>
+#include <future>
 #include <stdexcept>
 #include <vector>
 
@@ -31,6 +34,10 @@ constexpr double kMaxSampleRate = 10000.0;
 /// The period search runs at the IMU rate decimated to at least this many times max_frequency
 /// (anti-alias: FrequencyTracker's triangular filter, -25 dB where aliases fold into the band).
 constexpr double kDecimatedRateFactor = 5.0;
+/// Samples processed again per new sample after the calibration window ends: the window is
+/// replayed over the next calibration_duration / (kReplayPerSample - 1) instead of within one
+/// sample's call, its outputs held until it has caught up.
+constexpr std::size_t kReplayPerSample = 8;
 
 bool isFinite(const Vector3& v)
 {
@@ -312,7 +319,12 @@ public:
     leveller_.orient(&s, dt, config_.gyro_attitude && config_.mode == Mode::kDefault,
                      { config_.tilt_time_constant, config_.estimate_gyro_bias });
     CompensatorOutput output;
-    if (needsCalibration())
+    if (!replay_.empty())
+    {
+      replay_.push_back({ s, dt });
+      continueReplay(&output);
+    }
+    else if (needsCalibration())
     {
       if (calibration_.add(s, dt, config_.calibration_duration) && planned_rate_ > 0.0)
       {
@@ -349,6 +361,8 @@ public:
     bias_from_file_ = false;
     calibrated_ = false;
     calibration_.clear();
+    replay_.clear();
+    replayed_ = window_end_ = 0;
   }
 
   bool setConstantBias(const Vector3& bias)
@@ -460,6 +474,22 @@ private:
       axis.paper.setCapacity(table);
       axis.wave.setCapacity(table);
     }
+    // windowOffset plans the calibration window's transform on the sample that ends the window:
+    // the sizes that window can have are planned now, in the background (not while a previous
+    // warm-up still runs: waiting for it here would stall this sample).
+    if (!calibrated_ &&
+        (!fft_warm_.valid() || fft_warm_.wait_for(std::chrono::seconds(0)) == std::future_status::ready))
+    {
+      const int samples = static_cast<int>(std::lround(config_.calibration_duration * rate));
+      fft_warm_ = std::async(std::launch::async, [samples] {
+        lowerThreadPriority();
+        std::vector<int> sizes;
+        for (int extra = -2; extra <= 3; ++extra)
+          sizes.push_back(fastFftSize(std::max(16, samples + extra)));
+        sizes.erase(std::unique(sizes.begin(), sizes.end()), sizes.end());
+        warmFftPlans(sizes);
+      });
+    }
     hop_samples_ = std::max(1, static_cast<int>(std::lround(config_.fft_hop * rate)));
     since_analysis_ = 0;
   }
@@ -467,6 +497,8 @@ private:
   /// Forgets the integrated motion and period search, keeps bias, level and sample rate.
   void resetMotion()
   {
+    replay_.clear();
+    replayed_ = window_end_ = 0;
     turns_.reset();
     for (auto& axis : axes_)
     {
@@ -534,19 +566,47 @@ private:
         axes_[i].locked = true;
         axes_[i].frequency = window_frequency[i].frequency;
       }
-    for (const auto& b : calibration_.samples())
-      *out = process(b.sample, b.dt);
-    calibration_.clear();
-    // The replay's harmonic models filled over their first period, and the observer took that
-    // period's wave as slow motion: its position and velocity restart here, at the first
-    // published output (held at zero until now), with the bias it learned.
-    if (config_.mode == Mode::kDefault)
-      for (int i = 0; i < 3; ++i)
-      {
-        axes_[i].drift.restartPosition();
-        axes_[i].slow_start = now_;
-        out->position_filtered[i] = out->velocity_filtered[i] = 0.0;
-      }
+    replay_ = calibration_.take();
+    window_end_ = replay_.size();
+    replay_.reserve(window_end_ + window_end_ / (kReplayPerSample - 1) + kReplayPerSample);
+    replayed_ = 0;
+    continueReplay(out);
+  }
+
+  /// The next kReplayPerSample samples of the replay: the window's, then those that arrived
+  /// while it ran, each processed as it would have been had the window been replayed at once;
+  /// *out: the last one's output, held until the replay has caught up.
+  void continueReplay(CompensatorOutput* out)
+  {
+    const std::size_t end = std::min(replay_.size(), replayed_ + kReplayPerSample);
+    for (; replayed_ < end; ++replayed_)
+    {
+      *out = process(replay_[replayed_].sample, replay_[replayed_].dt);
+      if (replayed_ + 1 == window_end_)
+        restartSlowMotion(out);
+    }
+    if (replayed_ < replay_.size())
+    {
+      holdOutput(out);
+      return;
+    }
+    replay_.clear();
+    replayed_ = window_end_ = 0;
+  }
+
+  /// At the end of the calibration window's replay. Its harmonic models filled over their first
+  /// period, and the observer took that period's wave as slow motion: its position and velocity
+  /// restart here, with the bias it learned (outputs held at zero until now).
+  void restartSlowMotion(CompensatorOutput* out)
+  {
+    if (config_.mode != Mode::kDefault)
+      return;
+    for (int i = 0; i < 3; ++i)
+    {
+      axes_[i].drift.restartPosition();
+      axes_[i].slow_start = now_;
+      out->position_filtered[i] = out->velocity_filtered[i] = 0.0;
+    }
   }
 
   CompensatorOutput process(const ImuSample& s, double dt)
@@ -800,9 +860,13 @@ private:
   double mean_force_ = 0.0;  ///< mean |specific force| (noteSpecificForce) [m/s^2]
   double force_time_ = 0.0;  ///< data behind it [s]
   double force_samples_ = 0.0;
-  std::array<ImuSample, kConfirmSamples> held_;  ///< samples held while a jump is confirmed
-  double rate_ = 0.0;                            ///< sample rate [Hz] (time_)
-  double planned_rate_ = 0.0;                    ///< rate the FFT windows were planned for [Hz]
+  std::array<ImuSample, kConfirmSamples> held_;    ///< samples held while a jump is confirmed
+  std::vector<CalibrationWindow::Sample> replay_;  ///< the ended window's samples and those since
+  std::size_t window_end_ = 0;                     ///< of replay_, the window's
+  std::size_t replayed_ = 0;                       ///< of replay_ processed again
+  std::future<void> fft_warm_;                     ///< planTrackers's warm-up of windowOffset's plans
+  double rate_ = 0.0;                              ///< sample rate [Hz] (time_)
+  double planned_rate_ = 0.0;                      ///< rate the FFT windows were planned for [Hz]
   int hop_samples_ = 1;
   int since_analysis_ = 0;
   double now_ = 0.0;    ///< time of the sample being processed [s]

@@ -2,10 +2,6 @@
 
 #include "real_fft.h"
 
-#include <sys/resource.h>
-#include <sys/syscall.h>
-#include <unistd.h>
-
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
@@ -43,7 +39,7 @@ FrequencyTracker::FrequencyTracker(int window_samples, double sample_rate, int d
   planning_ = std::async(std::launch::async, [size = fft_size_] {
     // At the lowest priority, so that it does not take the core from the thread that feeds the
     // samples (the first analysis, a hop later, is the first to need the plan).
-    setpriority(PRIO_PROCESS, static_cast<id_t>(syscall(SYS_gettid)), 19);
+    lowerThreadPriority();
     auto plan = std::make_unique<Plan>(size);
     plan->power.resize(size / 2 + 1);
     return plan;

@@ -1,5 +1,9 @@
 #include "real_fft.h"
 
+#include <sys/resource.h>
+#include <sys/syscall.h>
+#include <unistd.h>
+
 #include "periodic_bias_compensation/common/fftw_planner.h"
 
 namespace periodic_bias_compensation
@@ -15,6 +19,17 @@ int fastFftSize(int n)
     if (r == 1)
       return m;
   }
+}
+
+void lowerThreadPriority()
+{
+  setpriority(PRIO_PROCESS, static_cast<id_t>(syscall(SYS_gettid)), 19);
+}
+
+void warmFftPlans(const std::vector<int>& sizes)
+{
+  for (int n : sizes)
+    RealFft planned(n);
 }
 
 RealFft::RealFft(int n) : n_(n)

@@ -4,12 +4,21 @@
 #include <fftw3.h>
 
 #include <mutex>
+#include <vector>
 
 namespace periodic_bias_compensation
 {
 /// Smallest 2^a 3^b 5^c >= n: FFTW is fastest on such sizes (a window of 87.7 Hz x 30 s =
 /// 2631 = 3 x 877 samples would need a prime-size transform).
 int fastFftSize(int n);
+
+/// Lowers the calling thread to the lowest priority (nice 19): a thread that plans transforms in
+/// the background then leaves the core to the thread that feeds the samples.
+void lowerThreadPriority();
+
+/// Plans and drops transforms of these sizes. FFTW keeps what it planned: a transform of one of
+/// them is then planned in microseconds instead of milliseconds.
+void warmFftPlans(const std::vector<int>& sizes);
 
 /// The input `in` (n values) transformed into `out` (n / 2 + 1 bins) by execute(); `out` (the
 /// non-negative frequencies of a Hermitian spectrum) back into `in` by inverse(), unnormalised:

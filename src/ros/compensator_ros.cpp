@@ -635,7 +635,9 @@ void CompensatorRos::diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat)
   diagnoseInput(now, raise);
   diagnoseEvents(core, raise);
   diagnoseSetup(raise);
-  if (counters_.received > 0 && !compensator_->calibrated())
+  // The outputs stay held after the window while it is processed again (calibrated by then).
+  const bool held = has_output_ && last_output_.state == OutputState::kCalibrating;
+  if (counters_.received > 0 && (!compensator_->calibrated() || held))
   {
     // Normal at start-up: shown, not raised.
     messages.push_back("calibrating constant bias (odometry held at zero meanwhile)");

@@ -60,6 +60,13 @@ public:
   {
     return samples_;
   }
+  /// The samples, handed over; the window is then empty.
+  std::vector<Sample> take()
+  {
+    std::vector<Sample> taken;
+    taken.swap(samples_);
+    return taken;
+  }
   /// Adds a sample; whether the window now spans `duration` [s] from its first sample.
   bool add(const ImuSample& sample, double dt, double duration);
 
