@@ -13,10 +13,8 @@
 #include "real_fft.h"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <deque>
-#include <future>
 #include <stdexcept>
 #include <vector>
 
@@ -169,6 +167,8 @@ public:
     std::string why;
     if (!config_.validate(&why))
       throw std::invalid_argument("invalid compensator configuration: " + why);
+    // Starts the planning thread here, not in the call of the sample that first gives the rate.
+    planInBackground([] {});
   }
 
   bool setConfig(const CompensatorConfig& config, std::string* why)
@@ -468,21 +468,18 @@ private:
         std::clamp(static_cast<int>(rate / (kDecimatedRateFactor * config_.max_frequency)), 1, window / 16);
     for (auto& axis : axes_)
     {
-      axis.tracker = std::make_unique<FrequencyTracker>(window, rate, decimation);
+      axis.tracker = std::make_unique<FrequencyTracker>(window, rate, decimation, true);
       axis.locked = false;
       axis.frequency = 0.0;
       axis.paper.setCapacity(table);
       axis.wave.setCapacity(table);
     }
     // windowOffset plans the calibration window's transform on the sample that ends the window:
-    // the sizes that window can have are planned now, in the background (not while a previous
-    // warm-up still runs: waiting for it here would stall this sample).
-    if (!calibrated_ &&
-        (!fft_warm_.valid() || fft_warm_.wait_for(std::chrono::seconds(0)) == std::future_status::ready))
+    // the sizes that window can have are planned now, in the background.
+    if (!calibrated_)
     {
       const int samples = static_cast<int>(std::lround(config_.calibration_duration * rate));
-      fft_warm_ = std::async(std::launch::async, [samples] {
-        lowerThreadPriority();
+      planInBackground([samples] {
         std::vector<int> sizes;
         for (int extra = -2; extra <= 3; ++extra)
           sizes.push_back(fastFftSize(std::max(16, samples + extra)));
@@ -864,7 +861,6 @@ private:
   std::vector<CalibrationWindow::Sample> replay_;  ///< the ended window's samples and those since
   std::size_t window_end_ = 0;                     ///< of replay_, the window's
   std::size_t replayed_ = 0;                       ///< of replay_ processed again
-  std::future<void> fft_warm_;                     ///< planTrackers's warm-up of windowOffset's plans
   double rate_ = 0.0;                              ///< sample rate [Hz] (time_)
   double planned_rate_ = 0.0;                      ///< rate the FFT windows were planned for [Hz]
   int hop_samples_ = 1;

@@ -23,7 +23,7 @@ struct FrequencyTracker::Plan
   double window_sum = 0.0;
 };
 
-FrequencyTracker::FrequencyTracker(int window_samples, double sample_rate, int decimation)
+FrequencyTracker::FrequencyTracker(int window_samples, double sample_rate, int decimation, bool background)
   : n_(decimation >= 1 ? window_samples / decimation : 0), rate_(sample_rate / decimation), decimation_(decimation)
 {
   if (decimation < 1)
@@ -36,17 +36,34 @@ FrequencyTracker::FrequencyTracker(int window_samples, double sample_rate, int d
   ring_.assign(n_, 0.0);
   times_.assign(n_, 0.0);
   fft_size_ = fastFftSize(n_);
-  planning_ = std::async(std::launch::async, [size = fft_size_] {
-    // At the lowest priority, so that it does not take the core from the thread that feeds the
-    // samples (the first analysis, a hop later, is the first to need the plan).
-    lowerThreadPriority();
+  background_ = background;
+  if (!background)
+  {
+    plan_ = std::make_unique<Plan>(fft_size_);
+    plan_->power.resize(fft_size_ / 2 + 1);
+    return;
+  }
+  auto planned = std::make_shared<std::promise<std::unique_ptr<Plan>>>();
+  planning_ = planned->get_future();
+  planInBackground([planned, size = fft_size_] {
     auto plan = std::make_unique<Plan>(size);
     plan->power.resize(size / 2 + 1);
-    return plan;
+    planned->set_value(std::move(plan));
   });
 }
 
-FrequencyTracker::~FrequencyTracker() = default;
+FrequencyTracker::~FrequencyTracker()
+{
+  if (!background_)
+    return;
+  // After the plan's own task: the plan, made or taken, is dropped on the planning thread.
+  auto plan = std::make_shared<std::unique_ptr<Plan>>(std::move(plan_));
+  auto pending = std::make_shared<std::future<std::unique_ptr<Plan>>>(std::move(planning_));
+  planInBackground([plan = std::move(plan), pending = std::move(pending)] {
+    if (pending->valid())
+      pending->get();
+  });
+}
 
 FrequencyTracker::Plan& FrequencyTracker::plan()
 {

@@ -4,6 +4,10 @@
 #include <sys/syscall.h>
 #include <unistd.h>
 
+#include <condition_variable>
+#include <deque>
+#include <thread>
+
 #include "periodic_bias_compensation/common/fftw_planner.h"
 
 namespace periodic_bias_compensation
@@ -21,9 +25,64 @@ int fastFftSize(int n)
   }
 }
 
-void lowerThreadPriority()
+namespace
 {
-  setpriority(PRIO_PROCESS, static_cast<id_t>(syscall(SYS_gettid)), 19);
+/// The thread behind planInBackground: a queue of tasks, run one at a time.
+class BackgroundPlanner
+{
+public:
+  BackgroundPlanner() : thread_([this] { run(); })
+  {
+  }
+  ~BackgroundPlanner()
+  {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      stop_ = true;
+    }
+    wake_.notify_one();
+    thread_.join();
+  }
+  void post(std::function<void()> task)
+  {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      tasks_.push_back(std::move(task));
+    }
+    wake_.notify_one();
+  }
+
+private:
+  void run()
+  {
+    setpriority(PRIO_PROCESS, static_cast<id_t>(syscall(SYS_gettid)), 19);
+    for (;;)
+    {
+      std::function<void()> task;
+      {
+        std::unique_lock<std::mutex> lock(mutex_);
+        wake_.wait(lock, [this] { return stop_ || !tasks_.empty(); });
+        if (tasks_.empty())
+          return;
+        task = std::move(tasks_.front());
+        tasks_.pop_front();
+      }
+      task();
+    }
+  }
+
+  std::mutex mutex_;
+  std::condition_variable wake_;
+  std::deque<std::function<void()>> tasks_;
+  bool stop_ = false;
+  std::thread thread_;  ///< last: started once the rest is built
+};
+}  // namespace
+
+void planInBackground(std::function<void()> task)
+{
+  static BackgroundPlanner planner;
+  planner.post(std::move(task));
 }
 
 void warmFftPlans(const std::vector<int>& sizes)

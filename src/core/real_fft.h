@@ -3,6 +3,7 @@
 
 #include <fftw3.h>
 
+#include <functional>
 #include <mutex>
 #include <vector>
 
@@ -12,9 +13,10 @@ namespace periodic_bias_compensation
 /// 2631 = 3 x 877 samples would need a prime-size transform).
 int fastFftSize(int n);
 
-/// Lowers the calling thread to the lowest priority (nice 19): a thread that plans transforms in
-/// the background then leaves the core to the thread that feeds the samples.
-void lowerThreadPriority();
+/// Runs `task` on the core's background planning thread (one per process, at nice 19, so that it
+/// leaves the core to the threads that feed samples), in the order given. FFTW plans a transform
+/// size it has not seen in milliseconds: that is done there, not in a sample's call.
+void planInBackground(std::function<void()> task);
 
 /// Plans and drops transforms of these sizes. FFTW keeps what it planned: a transform of one of
 /// them is then planned in microseconds instead of milliseconds.

@@ -16,10 +16,11 @@ struct FrequencyEstimate
   double amplitude = 0.0;   ///< amplitude of the dominant sinusoid after the decimation filter [signal units]
 };
 
-/// Sliding-window FFT of one signal. The FFTW plan is made once per window size and reused; it is
-/// made on a thread of its own, started by the constructor (FFTW plans a size it has not seen in
+/// Sliding-window FFT of one signal. The FFTW plan is made once per window size and reused. With
+/// `background` it is made on the core's planning thread (FFTW plans a size it has not seen in
 /// milliseconds, too long for the sample that first gives the rate), and waited for by the first
-/// analysis if it is not ready by then.
+/// analysis if it is not ready by then; the destructor drops it there too (FFTW's planner lock,
+/// which destroying a plan takes, may be held by a plan being made).
 /// push() is O(1); analyse() costs one real FFT of the window (call it every hop, not every
 /// sample).
 ///
@@ -33,7 +34,8 @@ public:
   /// @param window_samples FFT window length [input samples], >= 16 x decimation
   /// @param sample_rate    input rate [Hz], > 0
   /// @param decimation     M >= 1 (1: every sample goes into the window)
-  FrequencyTracker(int window_samples, double sample_rate, int decimation = 1);
+  /// @param background     plan on the core's planning thread (see above)
+  FrequencyTracker(int window_samples, double sample_rate, int decimation = 1, bool background = false);
   ~FrequencyTracker();
   FrequencyTracker(const FrequencyTracker&) = delete;
   FrequencyTracker& operator=(const FrequencyTracker&) = delete;
@@ -83,6 +85,7 @@ private:
   int fft_size_;  ///< transform size, >= n_ (zero-padded)
   double rate_;   ///< decimated rate [Hz]
   int decimation_ = 1;
+  bool background_ = false;  ///< planned on the core's planning thread
   // Anti-alias filter (decimation_ > 1): moving sum of the last M inputs, summed over a block.
   std::vector<double> moving_;  ///< last M inputs
   int moving_head_ = 0;
