@@ -591,9 +591,10 @@ private:
     replayed_ = window_end_ = 0;
   }
 
-  /// At the end of the calibration window's replay. Its harmonic models filled over their first
-  /// period, and the observer took that period's wave as slow motion: its position and velocity
-  /// restart here, with the bias it learned (outputs held at zero until now).
+  /// At the calibration window's last sample, as it is processed again. The replay's harmonic
+  /// models filled over their first period, and the observer took that period's wave as slow
+  /// motion: its position and velocity restart here, with the bias it learned (outputs held at
+  /// zero until the replay has caught up).
   void restartSlowMotion(CompensatorOutput* out)
   {
     if (config_.mode != Mode::kDefault)
