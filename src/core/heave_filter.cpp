@@ -3,10 +3,53 @@
 #include <cmath>
 #include <stdexcept>
 
-#include <Eigen/Cholesky>
+#include <Eigen/Core>
 
 namespace periodic_bias_compensation
 {
+namespace
+{
+/// x solving a x = b for a symmetric positive definite a (its lower triangle read): Cholesky,
+/// written out for the fixed size (Eigen's general factorisation costs several times more on a
+/// 4 x 4, solved once per sample while the start correction runs).
+template <int N>
+Eigen::Matrix<double, N, 1> solvePositiveDefinite(const Eigen::Matrix<double, N, N>& a,
+                                                  const Eigen::Matrix<double, N, 1>& b)
+{
+  double l[N][N] = {};
+  for (int j = 0; j < N; ++j)
+  {
+    double diagonal = a(j, j);
+    for (int k = 0; k < j; ++k)
+      diagonal -= l[j][k] * l[j][k];
+    l[j][j] = std::sqrt(diagonal);
+    for (int i = j + 1; i < N; ++i)
+    {
+      double value = a(i, j);
+      for (int k = 0; k < j; ++k)
+        value -= l[i][k] * l[j][k];
+      l[i][j] = value / l[j][j];
+    }
+  }
+  Eigen::Matrix<double, N, 1> x;
+  for (int i = 0; i < N; ++i)  // l y = b
+  {
+    double value = b[i];
+    for (int k = 0; k < i; ++k)
+      value -= l[i][k] * x[k];
+    x[i] = value / l[i][i];
+  }
+  for (int i = N - 1; i >= 0; --i)  // l^T x = y
+  {
+    double value = x[i];
+    for (int k = i + 1; k < N; ++k)
+      value -= l[k][i] * x[k];
+    x[i] = value / l[i][i];
+  }
+  return x;
+}
+}  // namespace
+
 HeaveFilter::HeaveFilter(double corner_frequency)
 {
   setCornerFrequency(corner_frequency);
@@ -90,7 +133,7 @@ HeaveOutput HeaveFilter::update(double a, double dt)
   // A small ridge: until a few samples are in, the normal matrix is singular.
   Eigen::Matrix<double, kOrder, kOrder> regularised = normal_;
   regularised.diagonal().array() += 1e-9 * (1.0 + normal_.trace());
-  coefficients_ = regularised.ldlt().solve(moments_);
+  coefficients_ = solvePositiveDefinite(regularised, moments_);
   out.position -= phi.dot(coefficients_);
   out.velocity -= dphi.dot(coefficients_);
   out.acceleration -= ddphi.dot(coefficients_);
