@@ -349,6 +349,15 @@ void motionStage(DiagnoseContext* context, BaseEnsemble* base, Report* rep)
     trials("response coherence", kCoherenceTrials, [](double v, sim::Sea* sea) { sea->response_coherence = v; });
     responses();
   }
+  // Last, the short waves the hull does not follow (its length), against the fit so far.
+  std::optional<MotionCandidate> short_waves =
+      fitShortWaves(real, current(), adopted_summaries(), &rep->motion.findings);
+  if (short_waves)
+  {
+    short_waves->what = label(short_waves->what);
+    rep->motion.candidates.push_back(*short_waves);
+    consider(*short_waves);
+  }
   rep->motion_csv = motionCsv(rep->motion, adopted_summaries());
   if (!rep->motion.adopted.empty())
   {

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <numeric>
 #include <optional>
 
 #include "periodic_bias_compensation/common/numeric.h"
@@ -26,6 +27,17 @@ constexpr double kMinWaveHeight = 0.05;
 constexpr double kSeaTolerance = 0.15;
 /// The largest response factor a fit gives a degree of freedom [-].
 constexpr double kMaxResponse = 5.0;
+/// The band of the short-wave fit [Hz]: above the wave peak of a wind sea, below the sensor's
+/// own high-frequency effects; and the longest length it tries [m].
+constexpr double kShortWaveLow = 0.3;
+constexpr double kShortWaveHigh = 2.0;
+constexpr double kMaxLength = 300.0;
+/// Fewest spectrum bins the short-wave fit needs [-].
+constexpr std::size_t kMinShortWaveBins = 8;
+/// Median difference of log power [-] (natural log) between the recording's and the scenario's
+/// short waves below which they agree: a factor e, far beyond what a sea state's height or
+/// period off by 15 % makes of a JONSWAP tail.
+constexpr double kShortWaveMisfit = 1.0;
 /// A standing tilt or heading differs beyond this and three ensemble spreads [rad].
 constexpr double kAngleTolerance = 0.005;
 constexpr double kHeadingTolerance = 0.05;
@@ -126,6 +138,8 @@ MotionSummary summariseMotion(const Recording& r)
   // is the centroid of the spectrum to the fourth power: the top of a single peak, the middle of
   // a broad plateau whose highest bin wanders with the resolution (Young 1995).
   const Psd psd = welch(vertical, rate, segment);
+  m.vertical_df = psd.df;
+  m.vertical_density = psd.power;
   // Wave-band RMS per degree of freedom: the horizontal specific force along and across the mean
   // heading (world frame: no gravity in it), else the sensor's x and y; the gyro's three axes.
   const auto band_rms = [&](const Eigen::VectorXd& x) {
@@ -307,6 +321,103 @@ std::optional<MotionCandidate> fitWaveResponses(const MotionSummary& r, const si
   if (changed.empty())
     return std::nullopt;
   findings->push_back("wave responses (wave-band RMS per degree of freedom against the ensemble's): " + changed);
+  return candidate;
+}
+
+std::optional<MotionCandidate> fitShortWaves(const MotionSummary& r, const sim::Scenario& scenario,
+                                             const std::vector<MotionSummary>& sims, std::vector<std::string>* findings)
+{
+  if (!hasSea(scenario) || sims.empty() || r.vertical_density.empty() || !(r.vertical_df > 0.0))
+    return std::nullopt;
+  // The runs' mean spectrum, on the recording's bins (the runs share the recording's length and
+  // rate, so their bins are the same).
+  const std::size_t bins = r.vertical_density.size();
+  std::vector<double> sim(bins, 0.0);
+  for (const MotionSummary& m : sims)
+  {
+    if (m.vertical_density.size() != bins || std::abs(m.vertical_df - r.vertical_df) > 1e-9 * r.vertical_df)
+      return std::nullopt;
+    for (std::size_t k = 0; k < bins; ++k)
+      sim[k] += m.vertical_density[k] / sims.size();
+  }
+  const double nyquist = (bins - 1) * r.vertical_df;
+  const auto floorOf = [&](const std::vector<double>& density) {
+    std::vector<double> top;
+    for (std::size_t k = 0; k < bins; ++k)
+      if (k * r.vertical_df >= 0.8 * nyquist)
+        top.push_back(density[k]);
+    return top.empty() ? 0.0 : upperMedian(top.begin(), top.end());
+  };
+  const double real_floor = floorOf(r.vertical_density), sim_floor = floorOf(sim);
+  const double high = std::min(kShortWaveHigh, 0.8 * nyquist);
+  // Per bin: the wavenumber (deep water), the recording's log power, the runs' motion above
+  // their floor.
+  struct Bin
+  {
+    double k, real, motion;
+  };
+  std::vector<Bin> used;
+  const double g = scenario.gravity;
+  for (std::size_t k = 1; k < bins; ++k)
+  {
+    const double f = k * r.vertical_df;
+    if (f < kShortWaveLow || f > high)
+      continue;
+    if (r.vertical_density[k] > 10.0 * real_floor && sim[k] > 10.0 * sim_floor)
+      used.push_back({ std::pow(2.0 * M_PI * f, 2) / g, std::log(r.vertical_density[k]), sim[k] - sim_floor });
+  }
+  if (used.size() < kMinShortWaveBins)
+    return std::nullopt;
+  // Power of a component of wavenumber k through a hull of length L: (1 + (L k / 2 pi)^2)^-2.
+  const double given = scenario.motion.sea.length;
+  const auto attenuation = [](double length, double k) {
+    const double ratio = length * k / (2.0 * M_PI);
+    return 1.0 / std::pow(1.0 + ratio * ratio, 2);
+  };
+  // |log power| differences per bin, and their sum (least absolute deviations: a few bins where
+  // one spectrum ends, the simulator's highest wave component say, do not steer it).
+  const auto residuals = [&](double length) {
+    std::vector<double> out;
+    for (const Bin& b : used)
+      out.push_back(
+          std::abs(b.real - std::log(b.motion * attenuation(length, b.k) / attenuation(given, b.k) + sim_floor)));
+    return out;
+  };
+  const auto cost = [&](double length) {
+    const std::vector<double> r = residuals(length);
+    return std::accumulate(r.begin(), r.end(), 0.0);
+  };
+  std::vector<double> misfit = residuals(given);
+  if (upperMedian(misfit.begin(), misfit.end()) <= kShortWaveMisfit)
+    return std::nullopt;
+  // A grid of lengths (every 0.5 m), then golden-section refinement around the best.
+  double best = 0.0, best_cost = cost(0.0);
+  for (double length = 0.5; length <= kMaxLength; length += 0.5)
+  {
+    const double c = cost(length);
+    if (c < best_cost)
+    {
+      best_cost = c;
+      best = length;
+    }
+  }
+  double lo = std::max(0.0, best - 0.5), hi = std::min(kMaxLength, best + 0.5);
+  const double ratio = 0.5 * (std::sqrt(5.0) - 1.0);
+  for (int i = 0; i < 40; ++i)
+  {
+    const double a = hi - ratio * (hi - lo), b = lo + ratio * (hi - lo);
+    if (cost(a) < cost(b))
+      hi = b;
+    else
+      lo = a;
+  }
+  best = 0.5 * (lo + hi);
+  if (std::abs(best - given) <= std::max(1.0, kSeaTolerance * given))
+    return std::nullopt;
+  MotionCandidate candidate{ "short waves", scenario };
+  candidate.scenario.motion.sea.length = best;
+  findings->push_back(format("short waves: the vertical spectrum over %.2g-%.2g Hz follows", kShortWaveLow, high) +
+                      format(" a hull of length %.3g m against %.3g m in the scenario", best, given));
   return candidate;
 }
 

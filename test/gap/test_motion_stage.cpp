@@ -113,3 +113,28 @@ TEST(GapMotion, AHullsOwnResponsesAreFittedBeforeSensorEffects)
   // No sensor effect is made of the motion.
   EXPECT_LT(rep.confidence, 0.5) << gap::reportSummary(rep);
 }
+
+TEST(GapMotion, AHullThatDoesNotFollowShortWavesIsFittedItsLength)
+{
+  // The recording: a 4 s wind sea under a 12 m hull, whose short waves move it less; the scenario:
+  // the same sea on a hull that follows the water at a point.
+  sim::Scenario scenario = mooredSea(1.5, 4.0);
+  sim::Scenario recorded = scenario;
+  recorded.motion.sea.length = 12.0;
+  const gap::MotionSummary real = gap::summariseMotion(gap::simulateRecording(recorded, 15));
+  const auto runs = [](const sim::Scenario& s) {
+    std::vector<gap::MotionSummary> out;
+    for (int i = 0; i < periodic_bias_compensation::test::ensembleToRun(4); ++i)
+      out.push_back(gap::summariseMotion(gap::simulateRecording(s, 100 + i)));
+    return out;
+  };
+  std::vector<std::string> findings;
+  const auto fit = gap::fitShortWaves(real, scenario, runs(scenario), &findings);
+  ASSERT_TRUE(fit.has_value());
+  EXPECT_NEAR(fit->scenario.motion.sea.length, 12.0, 2.4);
+  ASSERT_EQ(findings.size(), 1u);
+  EXPECT_NE(findings[0].find("hull of length"), std::string::npos) << findings[0];
+  // The scenario's own hull: nothing to fit.
+  findings.clear();
+  EXPECT_FALSE(gap::fitShortWaves(real, recorded, runs(recorded), &findings).has_value()) << findings.front();
+}

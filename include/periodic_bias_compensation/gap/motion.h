@@ -26,8 +26,10 @@ struct MotionSummary
   /// orientation; without one the sensor's x and y) [m/s^2], the vertical one [m/s^2], the
   /// gyro's x, y, z [rad/s].
   std::array<double, 6> wave_rms{};
-  std::vector<double> heave_frequency;  ///< bins of the heave spectrum in that band [Hz]
-  std::vector<double> heave_density;    ///< the heave spectrum there [m^2/Hz]
+  std::vector<double> heave_frequency;   ///< bins of the heave spectrum in that band [Hz]
+  std::vector<double> heave_density;     ///< the heave spectrum there [m^2/Hz]
+  double vertical_df = 0.0;              ///< bin spacing of vertical_density [Hz]
+  std::vector<double> vertical_density;  ///< the vertical specific force's spectrum, bins 0 .. [(m/s^2)^2/Hz]
 };
 
 /// Heave from the vertical specific force (through the reported orientation when there is one,
@@ -74,6 +76,20 @@ MotionFit fitMotion(const MotionSummary& real, const sim::Scenario& scenario, co
 std::optional<MotionCandidate> fitWaveResponses(const MotionSummary& real, const sim::Scenario& scenario,
                                                 const std::vector<MotionSummary>& runs,
                                                 std::vector<std::string>* findings, bool rotations_only = false);
+
+/// The length that filters the scenario's short waves (sim::Sea::length: each component's
+/// response divided by 1 + (length / wavelength)^2) fitted to the vertical specific force's
+/// spectrum above the wave peak: a buoy or hull that does not follow the short waves of a
+/// JONSWAP tail. A least-absolute-deviations fit in log power over the bins from kShortWaveLow
+/// to kShortWaveHigh Hz (at most 0.4 x the rate) where the motion stands a decade above the
+/// spectra's floor (their median over the top fifth of the band to the Nyquist frequency), the
+/// floor kept as it is. nullopt when the scenario has no sea, too few bins qualify, the spectra
+/// there agree within a factor e (the median over the bins), or the fitted length is within
+/// kSeaTolerance (and 1 m) of the scenario's. Adds a finding. The runs' summaries are of
+/// `scenario`.
+std::optional<MotionCandidate> fitShortWaves(const MotionSummary& real, const sim::Scenario& scenario,
+                                             const std::vector<MotionSummary>& runs,
+                                             std::vector<std::string>* findings);
 
 /// The heave spectra of the motion stage as CSV, "f,real,given,fitted" [Hz, m^2/Hz]: the
 /// recording's, the mean of the scenario's runs as given, and the mean of `fitted_runs` (the
