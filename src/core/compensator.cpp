@@ -740,6 +740,7 @@ private:
     in.residual = residual;
     in.harmonic_position = *wave_x;
     in.locked = axis.locked;
+    in.frequency = axis.frequency;
     in.allowed = turns_.horizontalShareAllowed();
     in.turning = turns_.turned();
     in.dt = dt;

@@ -190,8 +190,8 @@ TEST(BroadbandWave, TurnHandsTheVerticalToTheFixedFilterAndBack)
 
 // A long swell that the harmonic model, locked to a shorter period, fits in acceleration but
 // turns into far too little displacement (it divides by its own frequency squared): the
-// acceleration residual is small, the displacement error large. The share weighs the difference
-// of the two displacements, so the broadband estimate takes over.
+// acceleration residual is small, the displacement error large. The lock lies far from the
+// displacement spectrum's peak, so the broadband estimate takes the whole wave output.
 TEST(BroadbandWave, ModelLockedElsewhereGivesWayToTheBroadbandEstimate)
 {
   std::mt19937_64 rng(5);
@@ -223,6 +223,7 @@ TEST(BroadbandWave, ModelLockedElsewhereGivesWayToTheBroadbandEstimate)
     in.residual = 0.2 * a;
     in.harmonic_position = -0.8 * a / (locked * locked);
     in.locked = true;
+    in.frequency = locked / (2.0 * M_PI);
     in.dt = i > 0 ? dt : 0.0;
     in.rate = kRate;
     const BroadbandWaveOutput out = wave.update(in);
@@ -239,8 +240,38 @@ TEST(BroadbandWave, ModelLockedElsewhereGivesWayToTheBroadbandEstimate)
       "harmonic %.3f m\n",
       smallest_weight, std::sqrt(blended2 / (600 * kRate)), std::sqrt(broadband2 / (600 * kRate)),
       std::sqrt(harmonic2 / (600 * kRate)));
-  EXPECT_GT(smallest_weight, 0.8);
-  EXPECT_LT(blended2, 4.0 * broadband2);
+  EXPECT_GT(smallest_weight, 0.95);
+  EXPECT_LT(blended2, 1.2 * broadband2);
+}
+
+// A narrow sea that the harmonic model follows at its peak (a sinusoid of 0.1 Hz, 0.3 m, with
+// noise; the model's displacement within 2 % of it): the share is the inverse-variance one, never
+// overruled to the whole output (which it reaches within seconds when the lock is off the peak).
+TEST(BroadbandWave, ALockOnTheDisplacementPeakIsNotOverruled)
+{
+  std::mt19937_64 rng(6);
+  std::normal_distribution<double> normal(0.0, 0.004 * std::sqrt(kRate / 2.0));
+  const double w = 2.0 * M_PI * 0.1, dt = 1.0 / kRate;
+  BroadbandWave wave(false);
+  double largest_weight = 0.0;
+  for (long i = 0; i < static_cast<long>(900 * kRate); ++i)
+  {
+    const double t = i * dt, x = 0.3 * std::sin(w * t), a = -w * w * x;
+    BroadbandWaveInput in;
+    in.raw = a + normal(rng);
+    in.offset_free = in.raw;
+    in.residual = in.raw - 0.98 * a;
+    in.harmonic_position = 0.98 * x;
+    in.locked = true;
+    in.frequency = 0.1;
+    in.dt = i > 0 ? dt : 0.0;
+    in.rate = kRate;
+    const BroadbandWaveOutput out = wave.update(in);
+    if (t >= 300.0)
+      largest_weight = std::max(largest_weight, out.weight);
+  }
+  std::printf("lock on the displacement peak: largest share %.2f\n", largest_weight);
+  EXPECT_LT(largest_weight, 0.9);
 }
 
 }  // namespace periodic_bias_compensation

@@ -21,7 +21,13 @@
 //    than a mean follows);
 //  - the broadband share V_missed / (V_missed + V_broadband), zero below kMinWeight, is followed
 //    with kWeightTime: a narrow sea (the bench) or none (at rest) keeps the harmonic model
-//    whatever the bias does; a broad one (JONSWAP) takes the broadband estimate.
+//    whatever the bias does; a broad one (JONSWAP) takes the broadband estimate;
+//  - once that share is open, the whole of it when the lock lies more than kOffPeak from the peak
+//    of the spectral estimate's displacement spectrum: the lock follows the acceleration's peak,
+//    which on a broad sea lies above the displacement's (a factor omega^2 apart), so the harmonic
+//    model misses most of the displacement while both measures of its miss read low (the
+//    residual's high-passes take the low frequencies, and the two displacements' errors are not
+//    independent).
 // While the ship turns, the spectrum is measured anew (WienerHeave::restartRecord); the vertical
 // axis crosses over to the fixed filter with WienerHeave::kDesignFade and back once the new record
 // gives a design. A horizontal axis takes the spectral estimate only, and none while the owner says it may not
@@ -46,6 +52,7 @@ struct BroadbandWaveInput
   double residual = 0.0;           ///< what the harmonic model leaves of the acceleration [m/s^2]
   double harmonic_position = 0.0;  ///< the harmonic model's wave displacement [m]
   bool locked = false;             ///< the harmonic model has a lock
+  double frequency = 0.0;          ///< the lock's frequency [Hz] (with a lock)
   bool allowed = true;             ///< a horizontal axis may take a broadband share now
   bool turning = false;            ///< the heading has moved: the sea as met changed, its spectrum is measured anew
   double dt = 0.0;                 ///< [s] since the previous sample (0: the first)
@@ -80,6 +87,9 @@ public:
   /// Lowest wave frequency relative to min_frequency (the lowest peak searched): a wind sea or a
   /// swell holds almost no energy below 0.6 times its peak frequency [-].
   static constexpr double kBandEdge = 0.6;
+  /// Relative distance of the lock from the displacement spectrum's peak beyond which an open
+  /// share becomes the whole wave output [-].
+  static constexpr double kOffPeak = 0.1;
 
   /// vertical: the fixed filter stands in until the spectral estimate is designed.
   explicit BroadbandWave(bool vertical = true, double corner_frequency = 0.015, double min_frequency = 0.05);
