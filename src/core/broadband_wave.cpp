@@ -131,8 +131,8 @@ BroadbandWaveOutput BroadbandWave::update(const BroadbandWaveInput& in)
   // E[(x_harmonic - x_broadband)^2] = V_missed + V_broadband for independent errors.
   if (target >= kMinWeight && difference_variance_ > broadband)
     target = std::max(target, 1.0 - broadband / difference_variance_);
-  // A lock away from the displacement's peak describes the wrong part of the sea: both measures
-  // above read its miss low (measured on a swell under a wind sea, sway: 5e-4 m^2 against 3e-3).
+  // A lock away from the displacement's peak describes the wrong part of the sea, and both
+  // measures above read its miss low (figures: docs/benchmarks.md, "Heave blend").
   const double peak = spectral_.peakFrequency();
   if (target >= kMinWeight && spectral.valid && in.locked && in.frequency > 0.0 && peak > 0.0 &&
       std::abs(in.frequency - peak) > kOffPeak * peak)

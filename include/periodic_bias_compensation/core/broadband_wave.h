@@ -24,7 +24,7 @@
 //    whatever the bias does; a broad one (JONSWAP) takes the broadband estimate;
 //  - once that share is open, the whole of it when the lock lies more than kOffPeak from the peak
 //    of the spectral estimate's displacement spectrum: the lock follows the acceleration's peak,
-//    which on a broad sea lies above the displacement's (a factor omega^2 apart), so the harmonic
+//    which on a broad sea lies above the displacement's (the spectra are a factor omega^4 apart), so the harmonic
 //    model misses most of the displacement while both measures of its miss read low (the
 //    residual's high-passes take the low frequencies, and the two displacements' errors are not
 //    independent).

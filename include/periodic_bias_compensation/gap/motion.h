@@ -28,8 +28,8 @@ struct MotionSummary
   std::array<double, 6> wave_rms{};
   std::vector<double> heave_frequency;   ///< bins of the heave spectrum in that band [Hz]
   std::vector<double> heave_density;     ///< the heave spectrum there [m^2/Hz]
-  double vertical_df = 0.0;              ///< bin spacing of vertical_density [Hz]
-  std::vector<double> vertical_density;  ///< the vertical specific force's spectrum, bins 0 .. [(m/s^2)^2/Hz]
+  double vertical_df = 0.0;              ///< bin spacing of the vertical specific force's spectrum [Hz]
+  std::vector<double> vertical_density;  ///< its spectrum from 0 Hz to the Nyquist frequency [(m/s^2)^2/Hz]
 };
 
 /// Heave from the vertical specific force (through the reported orientation when there is one,
