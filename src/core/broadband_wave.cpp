@@ -134,8 +134,9 @@ BroadbandWaveOutput BroadbandWave::update(const BroadbandWaveInput& in)
   // A lock away from the displacement's peak describes the wrong part of the sea, and both
   // measures above read its miss low (figures: docs/benchmarks.md, "Heave blend").
   const double peak = spectral_.peakFrequency();
+  // Only where the broadband estimate holds a sea (at rest its output is its own error).
   if (target >= kMinWeight && spectral.valid && in.locked && in.frequency > 0.0 && peak > 0.0 &&
-      std::abs(in.frequency - peak) > kOffPeak * peak)
+      wave_variance_ > kSeaOverError * broadband && std::abs(in.frequency - peak) > kOffPeak * peak)
     target = 1.0;
   // What the harmonic model's displacement misses: with a lock, what the residual or the difference
   // says; without one its output is none, so the whole wave. Velocity in proportion, at the

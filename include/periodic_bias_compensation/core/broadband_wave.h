@@ -23,11 +23,12 @@
 //    with kWeightTime: a narrow sea (the bench) or none (at rest) keeps the harmonic model
 //    whatever the bias does; a broad one (JONSWAP) takes the broadband estimate;
 //  - once that share is open, the whole of it when the lock lies more than kOffPeak from the peak
-//    of the spectral estimate's displacement spectrum: the lock follows the acceleration's peak,
-//    which on a broad sea lies above the displacement's (the spectra are a factor omega^4 apart), so the harmonic
-//    model misses most of the displacement while both measures of its miss read low (the
-//    residual's high-passes take the low frequencies, and the two displacements' errors are not
-//    independent).
+//    of the spectral estimate's displacement spectrum and that estimate holds a sea (its mean
+//    square kSeaOverError times its error): the lock follows the acceleration's peak, which on a
+//    broad sea lies above the displacement's (the spectra are a factor omega^4 apart), so the
+//    harmonic model misses most of the displacement while both measures of its miss read low
+//    (the residual's high-passes take the low frequencies, and the two displacements' errors are
+//    not independent).
 // While the ship turns, the spectrum is measured anew (WienerHeave::restartRecord); the vertical
 // axis crosses over to the fixed filter with WienerHeave::kDesignFade and back once the new record
 // gives a design. A horizontal axis takes the spectral estimate only, and none while the owner says it may not
@@ -90,6 +91,9 @@ public:
   /// Relative distance of the lock from the displacement spectrum's peak beyond which an open
   /// share becomes the whole wave output [-].
   static constexpr double kOffPeak = 0.1;
+  /// ... and only when the broadband displacement's mean square exceeds its error this many times
+  /// (a sea, not the noise and bias wander it passes at rest) [-].
+  static constexpr double kSeaOverError = 2.0;
 
   /// vertical: the fixed filter stands in until the spectral estimate is designed.
   explicit BroadbandWave(bool vertical = true, double corner_frequency = 0.015, double min_frequency = 0.05);
