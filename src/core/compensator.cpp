@@ -361,8 +361,7 @@ public:
     bias_from_file_ = false;
     calibrated_ = false;
     calibration_.clear();
-    replay_.clear();
-    replayed_ = window_end_ = 0;
+    endReplay();
   }
 
   bool setConstantBias(const Vector3& bias)
@@ -494,8 +493,7 @@ private:
   /// Forgets the integrated motion and period search, keeps bias, level and sample rate.
   void resetMotion()
   {
-    replay_.clear();
-    replayed_ = window_end_ = 0;
+    endReplay();
     turns_.reset();
     for (auto& axis : axes_)
     {
@@ -583,10 +581,14 @@ private:
         restartSlowMotion(out);
     }
     if (replayed_ < replay_.size())
-    {
       holdOutput(out);
-      return;
-    }
+    else
+      endReplay();
+  }
+
+  /// The replay is over, or dropped (a reset or recalibration during it): nothing is queued.
+  void endReplay()
+  {
     replay_.clear();
     replayed_ = window_end_ = 0;
   }
