@@ -10,6 +10,7 @@ add_library(${PROJECT_NAME}_core
   src/core/time_base.cpp
   src/core/real_fft.cpp
   src/core/wiener_heave.cpp
+  src/core/noise_floor.cpp
   src/core/lever_arm.cpp
   src/core/broadband_wave.cpp
   src/core/harmonic_model.cpp
@@ -39,6 +40,7 @@ if(CATKIN_ENABLE_TESTING)
     test/core/test_lever_arm.cpp
     test/core/test_time_base.cpp
     test/core/test_wiener_heave.cpp
+    test/core/test_noise_floor.cpp
     test/core/test_broadband_wave.cpp
     test/core/test_harmonic_model.cpp
     test/core/test_paper_loop.cpp

@@ -39,6 +39,9 @@ void BroadbandWave::reset()
   wave_velocity_variance_ = 0.0;
   previous_raw_ = NAN;
   noise_variance_ = 0.0;
+  noise_floor_.reset();
+  line_free_variance_ = 0.0;
+  noise_blocks_ = 0.0;
 }
 
 BroadbandWaveOutput BroadbandWave::update(const BroadbandWaveInput& in)
@@ -82,6 +85,14 @@ BroadbandWaveOutput BroadbandWave::update(const BroadbandWaveInput& in)
     {
       const double step = in.raw - previous_raw_;
       noise_variance_ += average * (0.5 * step * step - noise_variance_);
+    }
+    if (noise_floor_.add(in.raw))
+    {
+      // The same means over blocks: plain over the first kAveraging's, then moving.
+      noise_blocks_ += 1.0;
+      const double blocks = in.rate > 0.0 ? kAveraging * in.rate / NoiseFloor::kBlock : 1.0;
+      const double block_average = std::max(1.0 / std::max(blocks, 1.0), 1.0 / noise_blocks_);
+      line_free_variance_ += block_average * (noise_floor_.blockVariance() - line_free_variance_);
     }
     // Only against a locked model (before the first lock the residual is the whole wave).
     if (in.locked)

@@ -37,10 +37,12 @@
 // Threading: not thread-safe; the owner serialises calls.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 
 #include "periodic_bias_compensation/core/heave_filter.h"
+#include "periodic_bias_compensation/core/noise_floor.h"
 #include "periodic_bias_compensation/core/wiener_heave.h"
 
 namespace periodic_bias_compensation
@@ -109,11 +111,13 @@ public:
     return weight_;
   }
 
-  /// White-noise density of the acceleration squared, one-sided, from first differences
-  /// [(m/s^2)^2/Hz] at `rate`.
+  /// White-noise density of the acceleration squared, one-sided [(m/s^2)^2/Hz] at `rate`: from
+  /// first differences, or from the upper half of the spectrum (NoiseFloor) where that is lower
+  /// (lines above the wave band, an engine's vibration, inflate the first differences).
   double noiseDensitySquared(double rate) const
   {
-    return 2.0 * noise_variance_ * (rate > 0.0 ? 1.0 / rate : 0.0);
+    const double variance = noise_blocks_ > 0.0 ? std::min(noise_variance_, line_free_variance_) : noise_variance_;
+    return 2.0 * variance * (rate > 0.0 ? 1.0 / rate : 0.0);
   }
 
 private:
@@ -142,7 +146,10 @@ private:
   double wave_variance_ = 0.0;           ///< mean square of the broadband displacement [m^2]
   double wave_velocity_variance_ = 0.0;  ///< and of its velocity [m^2/s^2]
   double previous_raw_ = NAN;
-  double noise_variance_ = 0.0;  ///< white noise per sample [(m/s^2)^2]
+  double noise_variance_ = 0.0;  ///< white noise per sample from first differences [(m/s^2)^2]
+  NoiseFloor noise_floor_;
+  double line_free_variance_ = 0.0;  ///< white noise per sample from NoiseFloor's blocks, averaged
+  double noise_blocks_ = 0.0;        ///< blocks in line_free_variance_
 };
 
 }  // namespace periodic_bias_compensation
