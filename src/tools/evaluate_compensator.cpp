@@ -120,6 +120,9 @@ const char* const kFixedLevel = "default, no orientation: one level frame";
 /// The default mode with heave from the harmonic model (heave_filter: false), without the
 /// broadband estimate: kept in the tables to show what the heave filter changes.
 const char* const kHarmonicHeave = "default, harmonic heave";
+/// Not a method of the main table: the causal bound on the wave error (boundTable).
+const char* const kBound = "causal bound";
+const char* const kDefaultAfterSpan = "default, after the bound's span";
 const char* const kGyroLevel = "default, no orientation: gyro attitude";
 const char* const kGyroLevelBias = "default, no orientation: gyro attitude, gyro bias estimated";
 
@@ -419,6 +422,10 @@ void runSeed(const Setup& setup, const Options& options, int seed, Results* resu
       evaluate(samples, scenario.rate, gyro, std::nullopt, options.settle, nullptr, Orientation::kWithheld));
   for (const auto& [name, pattern] : options.estimates)
     errors[name].push_back(scoreEstimate(samples, seedPath(pattern, seed), options.settle));
+  // The bound and the default mode over the span where the bound has its history.
+  errors[kBound].push_back(metrics::causalBound(samples, pbc::kStandardGravity, options.settle, ours.lever_arm));
+  errors[kDefaultAfterSpan].push_back(
+      evaluate(samples, scenario.rate, ours, std::nullopt, options.settle + metrics::kBoundSpan));
 }
 
 /// The error table, per method and axis the medians over seeds; `csv`, if open, receives every
@@ -463,6 +470,39 @@ std::string errorTable(const std::vector<std::string>& methods,
         table << " | " << format(metrics::median(columns[c]), c < 7 ? "%.4f" : (c == 7 ? "%.1f" : "%.2f"));
       table << " |\n";
     }
+  return table.str();
+}
+
+/// The default mode's wave error against the causal bound (metrics::causalBound), medians over
+/// seeds.
+std::string boundTable(const std::map<std::string, std::vector<metrics::Errors>>& errors, double settle)
+{
+  std::ostringstream table;
+  table << "\nWave error against the causal bound, from " << format(settle + metrics::kBoundSpan, "%.0f")
+        << " s to the end: the best a causal linear filter of the axis's own level acceleration does there (FIR of "
+        << format(metrics::kBoundSpan, "%.0f")
+        << " s, fitted by least squares to the truth of the other half of the run), and the default mode over "
+           "the same span; medians over seeds:\n\n"
+           "| axis | bound [% of true wave RMS] | default [% of true wave RMS] | bound [% of Hs] "
+           "| default [% of Hs] |\n|---|---|---|---|---|\n";
+  const char* axes = "xyz";
+  for (int i = 0; i < 3; ++i)
+  {
+    std::array<std::vector<double>, 4> columns;
+    for (const metrics::Errors& e : errors.at(kBound))
+    {
+      columns[0].push_back(e.wave_rms_percent[i]);
+      columns[2].push_back(e.wave_hs_percent[i]);
+    }
+    for (const metrics::Errors& e : errors.at(kDefaultAfterSpan))
+    {
+      columns[1].push_back(e.wave_rms_percent[i]);
+      columns[3].push_back(e.wave_hs_percent[i]);
+    }
+    table << "| " << axes[i] << " | " << format(metrics::median(columns[0]), "%.1f") << " | "
+          << format(metrics::median(columns[1]), "%.1f") << " | " << format(metrics::median(columns[2]), "%.2f")
+          << " | " << format(metrics::median(columns[3]), "%.2f") << " |\n";
+  }
   return table.str();
 }
 
@@ -544,8 +584,8 @@ int main(int argc, char** argv)
     std::ofstream csv;
     if (csv_file)
       csv.open(csv_file->temporary());
-    const std::string table =
-        errorTable(methods, results.errors, &csv) + setup.paper.note + periodTable(results.periods);
+    const std::string table = errorTable(methods, results.errors, &csv) + setup.paper.note +
+                              periodTable(results.periods) + boundTable(results.errors, options.settle);
     std::ostringstream heading;
     heading << "scenario " << setup.scenario.name << ": " << setup.scenario.rate << " Hz, " << setup.scenario.duration
             << " s; medians over seeds 1.." << options.seeds << "; RMS errors from " << options.settle

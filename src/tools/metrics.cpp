@@ -4,6 +4,8 @@
 #include <cmath>
 #include <limits>
 
+#include <Eigen/Dense>
+
 #include "periodic_bias_compensation/common/numeric.h"
 #include "periodic_bias_compensation/core/raw_integrator.h"
 
@@ -139,6 +141,91 @@ Errors highPassBaseline(const std::vector<sim::Sample>& samples, double gravity,
     scorer.add(s, Vector3::Zero(), position);
   }
   return scorer.finish(samples.back(), Vector3::Zero(), position);
+}
+
+Errors causalBound(const std::vector<sim::Sample>& samples, double gravity, double settle, const Vector3& lever_arm)
+{
+  const long n = static_cast<long>(samples.size());
+  const double rate = (n - 1) / (samples.back().stamp - samples.front().stamp);
+  const int spacing = std::max(1, static_cast<int>(std::lround(0.5 * rate)));
+  const long taps =
+      std::max(1L, std::min(static_cast<long>(std::lround(kBoundSpan * rate / spacing)), n / (4 * spacing)));
+  // Fit rows every fifth of the spacing: more rows than taps by far, fewer than samples.
+  const int stride = std::max(1, spacing / 5);
+  std::array<std::vector<double>, 3> low;  // the acceleration through two moving averages
+  std::array<std::vector<double>, 3> target;
+  std::vector<Vector3> lever(n);
+  for (auto& v : low)
+    v.resize(n);
+  for (auto& v : target)
+    v.resize(n);
+  std::array<std::vector<double>, 2> boxes{ std::vector<double>(spacing, 0.0), std::vector<double>(spacing, 0.0) };
+  for (int i = 0; i < 3; ++i)
+  {
+    double first = 0.0, second = 0.0;
+    std::fill(boxes[0].begin(), boxes[0].end(), 0.0);
+    std::fill(boxes[1].begin(), boxes[1].end(), 0.0);
+    for (long k = 0; k < n; ++k)
+    {
+      const sim::Sample& s = samples[k];
+      const double a = (s.orientation * s.accel - Vector3(0, 0, gravity))[i];
+      const int slot = static_cast<int>(k % spacing);
+      first += a - boxes[0][slot];
+      boxes[0][slot] = a;
+      second += first / spacing - boxes[1][slot];
+      boxes[1][slot] = first / spacing;
+      low[i][k] = second / spacing;
+      if (i == 0)
+        lever[k] = s.truth.attitude * lever_arm - lever_arm;
+      target[i][k] = s.truth.wave_position[i] + lever[k][i];
+    }
+  }
+  // Row k: the low-passed values at k, k - spacing, ... (zero before the first sample) and 1.
+  const auto row = [&](int i, long k, Eigen::VectorXd* x) {
+    for (long j = 0; j < taps; ++j)
+    {
+      const long at = k - j * spacing;
+      (*x)[j] = at >= 0 ? low[i][at] : 0.0;
+    }
+    (*x)[taps] = 1.0;
+  };
+  const long half = n / 2;
+  std::vector<Vector3> estimate(n, Vector3::Zero());
+  Eigen::VectorXd x(taps + 1);
+  for (int i = 0; i < 3; ++i)
+    for (int fold = 0; fold < 2; ++fold)
+    {
+      // Rows with the whole span of history only.
+      const long full = (taps - 1) * spacing;
+      const long begin = fold == 0 ? full : std::max(half, full), end = fold == 0 ? half : n;
+      const long rows = (end - begin + stride - 1) / stride;
+      Eigen::MatrixXd design(rows, taps + 1);
+      Eigen::VectorXd truth(rows);
+      for (long r = 0; r < rows; ++r)
+      {
+        row(i, begin + r * stride, &x);
+        design.row(r) = x.transpose();
+        truth[r] = target[i][begin + r * stride];
+      }
+      Eigen::MatrixXd normal = Eigen::MatrixXd::Zero(taps + 1, taps + 1);
+      normal.selfadjointView<Eigen::Lower>().rankUpdate(design.transpose());
+      normal = normal.selfadjointView<Eigen::Lower>();
+      // A ridge of 1e-9 of the mean diagonal: the solution, not a prior.
+      normal.diagonal().array() += 1e-9 * normal.diagonal().mean();
+      const Eigen::VectorXd weights = normal.ldlt().solve(design.transpose() * truth);
+      // Applied to the other half.
+      const long other_begin = fold == 0 ? half : 0, other_end = fold == 0 ? n : half;
+      for (long k = other_begin; k < other_end; ++k)
+      {
+        row(i, k, &x);
+        estimate[k][i] = x.dot(weights);
+      }
+    }
+  Scorer scorer(samples.front(), settle + kBoundSpan);
+  const Vector3 slow0 = samples.front().truth.slow_position;
+  for (long k = 1; k < n; ++k)
+    scorer.add(samples[k], samples[k].truth.slow_position - slow0, estimate[k] - lever[k]);
+  return scorer.finish(samples.back(), samples.back().truth.slow_position - slow0, estimate[n - 1] - lever[n - 1]);
 }
 
 Errors integrateRaw(const std::vector<sim::Sample>& samples, double gravity)

@@ -1,13 +1,16 @@
 // The metrics of evaluate_compensator's tables on synthetic runs whose errors are known: a scorer
 // given a known offset, nearest-rank percentiles and medians of small vectors, the high-pass
-// filter's step and sinusoid responses, the period scorer on a sinusoid of known period, and the
-// two baselines on a constant acceleration.
+// filter's step and sinusoid responses, the period scorer on a sinusoid of known period, the
+// two baselines on a constant acceleration, and the causal bound on sinusoids with and without
+// noise.
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <functional>
 #include <limits>
+#include <random>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "periodic_bias_compensation/tools/metrics.h"
@@ -279,4 +282,44 @@ TEST(Metrics, PeriodScorerOnASinusoidOfKnownPeriod)
   EXPECT_NEAR(errors.error_p95.y(), 10.0, 1e-9);  // only hops while locked count
   EXPECT_TRUE(std::isnan(errors.error_median.z()));
   EXPECT_TRUE(std::isnan(errors.error_p95.z()));
+}
+
+namespace
+{
+/// Two sinusoids of heave, 0.3 m at 0.1 Hz and 0.1 m at 0.17 Hz, at 20 Hz for 900 s, plus white
+/// noise of `sigma` m/s^2 on the specific force and a constant bias of 0.05 m/s^2.
+std::vector<sim::Sample> twoComponentHeave(double sigma)
+{
+  std::mt19937_64 rng(7);
+  std::normal_distribution<double> noise(0.0, sigma);
+  return run(20.0, 900.0, [&](double t, sim::Sample* s) {
+    double z = 0.0, a = 0.0;
+    for (const auto& [amplitude, frequency] : { std::pair{ 0.3, 0.1 }, std::pair{ 0.1, 0.17 } })
+    {
+      const double w = 2.0 * M_PI * frequency;
+      z += amplitude * std::sin(w * t);
+      a -= amplitude * w * w * std::sin(w * t);
+    }
+    s->truth.wave_position = Vector3(0, 0, z);
+    s->truth.position = s->truth.wave_position;
+    s->accel = Vector3(0, 0, kGravity + a + 0.05 + noise(rng));
+  });
+}
+}  // namespace
+
+TEST(Metrics, CausalBoundOfANoiseFreeSeaIsNearZero)
+{
+  // A sum of sinusoids is predicted exactly by a causal FIR from its own acceleration (and the
+  // constant bias by the fit's constant).
+  const metrics::Errors bound = metrics::causalBound(twoComponentHeave(0.0), kGravity, 20.0, Vector3::Zero());
+  EXPECT_LT(bound.wave_rms_percent.z(), 1.0);
+}
+
+TEST(Metrics, CausalBoundGrowsWithTheNoise)
+{
+  const metrics::Errors quiet = metrics::causalBound(twoComponentHeave(0.01), kGravity, 20.0, Vector3::Zero());
+  const metrics::Errors noisy = metrics::causalBound(twoComponentHeave(0.1), kGravity, 20.0, Vector3::Zero());
+  EXPECT_GT(quiet.wave_rms_percent.z(), 0.0);
+  EXPECT_GT(noisy.wave_rms_percent.z(), 2.0 * quiet.wave_rms_percent.z());
+  EXPECT_LT(noisy.wave_rms_percent.z(), 100.0);
 }

@@ -136,6 +136,20 @@ Errors highPassBaseline(const std::vector<sim::Sample>& samples, double gravity,
 /// slow motion at the checkpoints and the end only (the RMS and wave errors are NaN).
 Errors integrateRaw(const std::vector<sim::Sample>& samples, double gravity);
 
+/// The lowest wave error a causal linear filter of each axis's own level acceleration reaches on
+/// this run, with the truth to fit it: the acceleration (reported orientation, `gravity` off z)
+/// through the spectral heave estimate's low-pass (two moving averages over about 0.5 s), an FIR of
+/// kBoundSpan over those values 0.5 s apart ending at each sample, plus a constant; the taps fitted
+/// by least squares to the true wave displacement of the IMU's point (base_link's plus the lever
+/// arm's `R r - r`, `lever_arm` in base_link) on one half of the run and applied to the other
+/// (each half predicted by the other's fit), where kBoundSpan of history exists. No causal linear
+/// estimate from that axis alone does better on a stationary sea once it has that history; other
+/// inputs (the attitude, the other axes) could. Scored as the wave motion at base_link from
+/// `settle` + kBoundSpan [s] on (the first kBoundSpan lacks the history); its slow motion is the
+/// truth.
+constexpr double kBoundSpan = 120.0;  ///< [s], the spectral heave estimate's longest span
+Errors causalBound(const std::vector<sim::Sample>& samples, double gravity, double settle, const Vector3& lever_arm);
+
 /// Value below which `share` (0..1) of `values` lie, nearest rank: the element of rank
 /// floor(share n) (from 0) of the n values sorted, at most the largest; NaN for none.
 double percentile(std::vector<double> values, double share);
