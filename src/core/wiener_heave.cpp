@@ -143,6 +143,7 @@ WienerHeaveOutput WienerHeave::update(double a, double dt, double noise_density_
   apply(*current_, &out.position, &out.velocity);
   out.error_variance = current_->error_variance;
   out.velocity_error_variance = current_->velocity_error_variance;
+  out.fit_error_variance = current_->fit_error_variance;
   if (previous_)
   {
     fade_ = std::min(1.0, fade_ + dt_ / kDesignFade);
@@ -192,25 +193,14 @@ void WienerHeave::apply(const Design& d, double* x, double* v) const
   *v = (pv[0] + pv[1]) + (pv[2] + pv[3]);
 }
 
-void WienerHeave::design(double noise_density_squared)
+WienerHeave::Statistics WienerHeave::statistics(int segment, double mean, double noise_density_squared, int taps) const
 {
-  if (!transform_.fft)
-    transform_.fft = std::make_shared<RealFft>(kDftSize);
   RealFft& fft = *transform_.fft;
   const int n = static_cast<int>(decimated_.size());
   const double fs = 1.0 / (decimation_ * dt_);
-  double mean = 0.0;
-  for (double value : decimated_)
-    mean += value;
-  mean /= n;
-
   // Welch: two-sided density [(m/s^2)^2/Hz] at kDftSize / 2 + 1 frequencies.
   const int bins = kDftSize / 2 + 1;
   std::vector<double> density(bins, 0.0);
-  // Segments of kSegment, shorter (coarser, but more than one) while the record is short.
-  int segment = kSegment;
-  while (segment > kMinSegment && 2 * segment > n)
-    segment /= 2;
   std::vector<double> window(segment);
   double window_power = 0.0;
   for (int i = 0; i < segment; ++i)
@@ -219,7 +209,7 @@ void WienerHeave::design(double noise_density_squared)
     window_power += window[i] * window[i];
   }
   int segments = 0;
-  for (int start = n - segment; start >= 0; start -= segment / 2, ++segments)
+  for (int start = n - segment; start >= 0; start -= std::max(1, segment / 2), ++segments)
   {
     for (int i = 0; i < segment; ++i)
       fft.in[i] = window[i] * (decimated_[start + i] - mean);
@@ -246,8 +236,8 @@ void WienerHeave::design(double noise_density_squared)
     response[k] = fft.power(k) / fft.power(0);
   const int below = std::min(bins, static_cast<int>(std::ceil(min_frequency_ / df)));
   std::vector<std::complex<double>> cross(bins);
-  double displacement_variance = 0.0, velocity_variance = 0.0, peak = 0.0;
-  peak_frequency_ = 0.0;
+  Statistics out;
+  double peak = 0.0;
   for (int k = 1; k < bins; ++k)
   {
     const double f = k * df, omega = 2.0 * M_PI * f;
@@ -265,29 +255,21 @@ void WienerHeave::design(double noise_density_squared)
     }
     cross[k] = -std::conj(aa) * wave / (omega * omega);
     const double displacement = wave / (omega * omega * omega * omega);
-    displacement_variance += 2.0 * displacement * df;
-    velocity_variance += 2.0 * displacement * omega * omega * df;
+    out.displacement_variance += 2.0 * displacement * df;
+    out.velocity_variance += 2.0 * displacement * omega * omega * df;
     if (displacement > peak)
     {
       peak = displacement;
-      peak_frequency_ = f;
+      out.peak_frequency = f;
     }
   }
   if (!(peak > 0.0))
+    return out;  // no wave in the spectrum
+  if (taps == 0)
   {
-    // No wave in the spectrum: no heave.
-    auto none = std::make_shared<Design>();
-    none->position.assign(1, 0.0);
-    none->velocity.assign(1, 0.0);
-    none->mean = mean;
-    previous_ = std::move(current_);
-    current_ = std::move(none);
-    stale_ = false;
-    fade_ = previous_ ? 0.0 : 1.0;
-    return;
+    const double span = std::clamp(kSpanPeriods / out.peak_frequency, kMinSpan, kMaxSpan);
+    taps = std::min(static_cast<int>(std::lround(span * fs)), kDftSize / 2);
   }
-  const double span = std::clamp(kSpanPeriods / peak_frequency_, kMinSpan, kMaxSpan);
-  const int taps = std::min(static_cast<int>(std::lround(span * fs)), kDftSize / 2);
 
   // Correlations at lags 0..taps-1: the inverse transforms of the (Hermitian) spectra, the
   // velocity's cross-spectrum j omega times the displacement's.
@@ -301,22 +283,92 @@ void WienerHeave::design(double noise_density_squared)
     fft.inverse();
     return std::vector<double>(fft.in, fft.in + taps);
   };
-  std::vector<double> autocorrelation = correlation([&](int k) { return std::complex<double>(density[k] * df); });
-  std::vector<double> r_position = correlation([&](int k) { return cross[k] * df; });
-  std::vector<double> r_velocity =
-      correlation([&](int k) { return std::complex<double>(0.0, 2.0 * M_PI * k * df) * cross[k] * df; });
-  auto next = std::make_shared<Design>();
-  if (!solveToeplitz(autocorrelation, r_position, &next->position) ||
-      !solveToeplitz(autocorrelation, r_velocity, &next->velocity))
-    return;  // keep the last design
-  double explained = 0.0, explained_velocity = 0.0;
-  for (int i = 0; i < taps; ++i)
+  out.autocorrelation = correlation([&](int k) { return std::complex<double>(density[k] * df); });
+  out.r_position = correlation([&](int k) { return cross[k] * df; });
+  out.r_velocity = correlation([&](int k) { return std::complex<double>(0.0, 2.0 * M_PI * k * df) * cross[k] * df; });
+  return out;
+}
+
+void WienerHeave::design(double noise_density_squared)
+{
+  if (!transform_.fft)
+    transform_.fft = std::make_shared<RealFft>(kDftSize);
+  const int n = static_cast<int>(decimated_.size());
+  double mean = 0.0;
+  for (double value : decimated_)
+    mean += value;
+  mean /= n;
+
+  // Segments of kSegment once the record holds two; before that the whole record as one: on a
+  // short record the resolution decides (a swell lies within the main lobe of short segments'
+  // zero frequency), more than the variance that averaging segments removes.
+  const bool whole = n < 2 * kSegment;
+  const Statistics fit = statistics(whole ? n : kSegment, mean, noise_density_squared, 0);
+  peak_frequency_ = fit.peak_frequency;
+  if (fit.autocorrelation.empty())
   {
-    explained += next->position[i] * r_position[i];
-    explained_velocity += next->velocity[i] * r_velocity[i];
+    // No wave in the spectrum: no heave.
+    auto none = std::make_shared<Design>();
+    none->position.assign(1, 0.0);
+    none->velocity.assign(1, 0.0);
+    none->mean = mean;
+    previous_ = std::move(current_);
+    current_ = std::move(none);
+    stale_ = false;
+    fade_ = previous_ ? 0.0 : 1.0;
+    return;
   }
-  next->error_variance = std::max(0.0, displacement_variance - explained);
-  next->velocity_error_variance = std::max(0.0, velocity_variance - explained_velocity);
+  auto next = std::make_shared<Design>();
+  if (!solveToeplitz(fit.autocorrelation, fit.r_position, &next->position) ||
+      !solveToeplitz(fit.autocorrelation, fit.r_velocity, &next->velocity))
+    return;  // keep the last design
+  // The expected error E[(x - h a)^2] = var(x) - 2 h r + h R h of taps h under other statistics;
+  // under those they were solved from (R h = r), var(x) - h r.
+  const auto error = [](const std::vector<double>& h, const std::vector<double>& r, const std::vector<double>& R,
+                        double variance) {
+    const int taps = static_cast<int>(h.size());
+    double cross = 0.0, quadratic = 0.0;
+    for (int i = 0; i < taps; ++i)
+    {
+      cross += h[i] * r[i];
+      double row = R[0] * h[i];
+      for (int j = i + 1; j < taps; ++j)
+        row += 2.0 * R[j - i] * h[j];
+      quadratic += h[i] * row;
+    }
+    return std::max(0.0, variance - 2.0 * cross + quadratic);
+  };
+  double explained = 0.0, explained_velocity = 0.0;
+  for (std::size_t i = 0; i < next->position.size(); ++i)
+  {
+    explained += next->position[i] * fit.r_position[i];
+    explained_velocity += next->velocity[i] * fit.r_velocity[i];
+  }
+  next->error_variance = std::max(0.0, fit.displacement_variance - explained);
+  next->velocity_error_variance = std::max(0.0, fit.velocity_variance - explained_velocity);
+  next->fit_error_variance = next->error_variance;
+  if (whole)
+  {
+    // Taps fitted to one periodogram fit its scatter too (each bin scatters by its own size), and
+    // their own error figure takes that for accuracy: they are also scored under a smoother
+    // estimate of the same record, three segments of half its length, and the larger error holds.
+    const Statistics check = statistics(std::max(kMinSegment / 2, n / 2), mean, noise_density_squared,
+                                        static_cast<int>(next->position.size()));
+    if (!check.autocorrelation.empty())
+    {
+      next->error_variance = std::max(next->error_variance, error(next->position, check.r_position,
+                                                                  check.autocorrelation, check.displacement_variance));
+      next->velocity_error_variance =
+          std::max(next->velocity_error_variance,
+                   error(next->velocity, check.r_velocity, check.autocorrelation, check.velocity_variance));
+    }
+    else
+    {
+      // The smoother estimate holds no wave: all of the output may be error.
+      next->error_variance = std::max(next->error_variance, fit.displacement_variance);
+      next->velocity_error_variance = std::max(next->velocity_error_variance, fit.velocity_variance);
+    }
+  }
   next->mean = mean;
   previous_ = std::move(current_);
   current_ = std::move(next);

@@ -11,7 +11,8 @@
 //  2. every kRedesignInterval (kEarlyRedesignInterval while the record is shorter than
 //     kEarlyRecord: each design from a short record improves on the last by more), from the last
 //     kDesignWindow of design-rate values: a Welch
-//     spectrum (Hann segments of kSegment, half overlap), the wave acceleration in it
+//     spectrum (Hann segments of kSegment, half overlap; the whole record as one segment while it
+//     is shorter than two), the wave acceleration in it
 //     (the spectrum less three times the white-noise floor, nothing below min_frequency), and
 //     from that the cross-correlation between displacement (acceleration / -omega^2) and the
 //     low-passed acceleration, and the acceleration's autocorrelation from the same spectrum;
@@ -43,6 +44,9 @@ struct WienerHeaveOutput
   double velocity = 0.0;                 ///< [m/s]
   double error_variance = 0.0;           ///< the design's expected displacement error variance [m^2]
   double velocity_error_variance = 0.0;  ///< [m^2/s^2]
+  /// The design's own figure, before the check of a design from one periodogram (equal to
+  /// error_variance for designs from averaged segments) [m^2].
+  double fit_error_variance = 0.0;
 };
 
 class WienerHeave
@@ -55,7 +59,7 @@ public:
   static constexpr double kEarlyRedesignInterval = 5.0;  ///< while the record is short [s]
   static constexpr double kEarlyRecord = 300.0;          ///< a record shorter than this is short [s]
   static constexpr int kSegment = 256;                   ///< Welch segment [design-rate samples]
-  static constexpr int kMinSegment = 64;                 ///< the shortest, for early designs
+  static constexpr int kMinSegment = 64;                 ///< the shortest record designed from
   static constexpr int kDftSize = 1024;                  ///< zero-padded transform of a segment
   static constexpr double kSpanPeriods = 6.0;            ///< FIR span in peak periods
   static constexpr double kMinSpan = 20.0;               ///< [s]
@@ -105,7 +109,21 @@ private:
     double mean = 0.0;  ///< the design window's mean acceleration, taken off first
     double error_variance = 0.0;
     double velocity_error_variance = 0.0;
+    double fit_error_variance = 0.0;
   };
+  /// What a design takes from a spectrum estimate of the record (Welch, Hann segments of
+  /// `segment` design-rate values, half overlap): correlations at lags 0..taps-1 (taps 0: six
+  /// periods of the displacement's peak, kMinSpan..kMaxSpan), empty when it holds no wave.
+  struct Statistics
+  {
+    std::vector<double> autocorrelation;  ///< of the low-passed acceleration
+    std::vector<double> r_position;       ///< of displacement with it
+    std::vector<double> r_velocity;       ///< of velocity with it
+    double displacement_variance = 0.0;
+    double velocity_variance = 0.0;
+    double peak_frequency = 0.0;  ///< of the displacement spectrum [Hz] (0: no wave)
+  };
+  Statistics statistics(int segment, double mean, double noise_density_squared, int taps) const;
   void design(double noise_density_squared);
   void apply(const Design& d, double* x, double* v) const;
 
