@@ -17,10 +17,10 @@
 #include <memory>
 #include <vector>
 
+#include "periodic_bias_compensation/core/unshared_transform.h"
+
 namespace periodic_bias_compensation
 {
-class RealFft;
-
 class NoiseFloor
 {
 public:
@@ -45,20 +45,8 @@ private:
   std::vector<double> window_;
   double window_power_ = 0.0;
   std::vector<double> bins_;
-  /// The transform, made at the first block; a copy of this object makes its own.
-  struct Transform
-  {
-    Transform() = default;
-    Transform(const Transform&)
-    {
-    }
-    Transform& operator=(const Transform&)
-    {
-      return *this;
-    }
-    std::shared_ptr<RealFft> fft;
-  };
-  Transform transform_;
+  /// The transform, made at the first block.
+  UnsharedTransform transform_;
 };
 
 }  // namespace periodic_bias_compensation

@@ -32,10 +32,10 @@
 #include <memory>
 #include <vector>
 
+#include "periodic_bias_compensation/core/unshared_transform.h"
+
 namespace periodic_bias_compensation
 {
-class RealFft;
-
 /// One step's output of WienerHeave.
 struct WienerHeaveOutput
 {
@@ -147,20 +147,8 @@ private:
   std::shared_ptr<const Design> current_, previous_;
   double fade_ = 1.0;  ///< weight of current_ against previous_
   double peak_frequency_ = 0.0;
-  /// The transform of the design, made at the first design; a copy of this object makes its own.
-  struct Transform
-  {
-    Transform() = default;
-    Transform(const Transform&)
-    {
-    }
-    Transform& operator=(const Transform&)
-    {
-      return *this;
-    }
-    std::shared_ptr<RealFft> fft;
-  };
-  Transform transform_;
+  /// The transform of the design, made at the first design.
+  UnsharedTransform transform_;
 };
 
 }  // namespace periodic_bias_compensation
