@@ -2,14 +2,15 @@
 // ROS).
 //
 // The mean square of first differences, `E[(a_k - a_k-1)^2] = 2 sigma^2`, reads every line above
-// the wave band as noise: an engine's vibration of 0.1 m/s^2 at 24.5 Hz is 25 times the white
-// noise of a 2e-3 m/s^2/sqrt(Hz) accelerometer at 100 Hz. The spectral heave design subtracts that
-// level from the wave band, where the vibration is not (the design's low-pass removes it), and
-// then passes too little of a swell. NoiseFloor therefore takes blocks of kBlock samples, their
-// Hann-windowed periodogram, and the median over the upper half of the band (a quarter to half
-// the sample rate: no wave acceleration worth the name, and a few lines occupy a few bins of the
-// kBlock / 4 taken). For white noise the periodogram's bins are exponentially distributed, their
-// median ln 2 times their mean, the mean sigma^2 times the window's sum of squares.
+// the wave band as noise: an engine's lines of 0.1 and 0.08 m/s^2 at 24.5 and 39 Hz read as 26
+// times the white noise of a 2e-3 m/s^2/sqrt(Hz) accelerometer at 100 Hz. The spectral heave
+// design subtracts that level from the wave band, where the vibration is not (the design's
+// low-pass removes it), and then passes too little of a swell. NoiseFloor therefore takes blocks
+// of kBlock samples, their Hann-windowed periodogram, and the median over the upper half of the
+// band (a quarter to half the sample rate: no wave acceleration worth the name, and a few lines
+// occupy a few of the kBlock / 4 bins taken). For white noise the periodogram's bins are
+// exponentially distributed, their median ln 2 times their mean, the mean sigma^2 times the
+// window's sum of squares.
 //
 // Threading: not thread-safe; the owner serialises calls.
 #pragma once
