@@ -384,8 +384,8 @@ std::optional<MotionCandidate> fitShortWaves(const MotionSummary& r, const sim::
     return out;
   };
   const auto cost = [&](double length) {
-    const std::vector<double> r = residuals(length);
-    return std::accumulate(r.begin(), r.end(), 0.0);
+    const std::vector<double> deviations = residuals(length);
+    return std::accumulate(deviations.begin(), deviations.end(), 0.0);
   };
   std::vector<double> misfit = residuals(given);
   if (upperMedian(misfit.begin(), misfit.end()) <= kShortWaveMisfit)
