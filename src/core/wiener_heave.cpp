@@ -66,6 +66,9 @@ void WienerHeave::setMinFrequency(double min_frequency)
 void WienerHeave::reset()
 {
   dt_ = 0.0;
+  steps_sum_ = 0.0;
+  steps_ = 0;
+  start_steps_.clear();
   decimation_ = 0;
   first_.clear();
   second_.clear();
@@ -90,6 +93,15 @@ void WienerHeave::restartRecord()
   stale_ = current_ != nullptr;
 }
 
+void WienerHeave::addStep(double dt)
+{
+  // A lost sample's double step, or a glitch, is no period.
+  if (!(dt > 0.5 * dt_ && dt < 2.0 * dt_))
+    return;
+  steps_sum_ += dt;
+  dt_ = steps_sum_ / static_cast<double>(++steps_);
+}
+
 WienerHeaveOutput WienerHeave::update(double a, double dt, double noise_density_squared)
 {
   WienerHeaveOutput out;
@@ -97,17 +109,28 @@ WienerHeaveOutput WienerHeave::update(double a, double dt, double noise_density_
     return out;
   if (decimation_ == 0)
   {
-    // The first sample's dt is unknown: wait for a step. Periods outside kMinPeriod..kMaxPeriod
-    // (a glitch, not an IMU) would size the buffers absurdly: nothing is designed from them.
+    // The first sample's dt is unknown: wait for kStartSteps steps, whose median sizes the
+    // buffers (one step is a driver's jitter, up to half a period either way). Periods outside
+    // kMinPeriod..kMaxPeriod (a glitch, not an IMU) would size them absurdly: never taken.
     if (!(dt >= kMinPeriod && dt <= kMaxPeriod))
       return out;
-    dt_ = dt;
-    decimation_ = std::max(1, static_cast<int>(std::lround(kDesignPeriod / dt)));
+    start_steps_.push_back(dt);
+    if (start_steps_.size() < static_cast<size_t>(kStartSteps))
+      return out;
+    std::vector<double> sorted = start_steps_;
+    std::nth_element(sorted.begin(), sorted.begin() + kStartSteps / 2, sorted.end());
+    dt_ = sorted[kStartSteps / 2];
+    decimation_ = std::max(1, static_cast<int>(std::lround(kDesignPeriod / dt_)));
+    for (double step : start_steps_)
+      addStep(step);
+    start_steps_.clear();
     first_.assign(decimation_, 0.0);
     second_.assign(decimation_, 0.0);
     ring_length_ = static_cast<int>(std::ceil(kMaxSpan / (decimation_ * dt_)));
     history_.assign(static_cast<size_t>(ring_length_) * decimation_, 0.0);
   }
+  else
+    addStep(dt);
   // Two moving averages (running sums over circular buffers of decimation_ values).
   const int slot = static_cast<int>(samples_ % decimation_);
   first_sum_ += a - first_[slot];
@@ -268,7 +291,10 @@ WienerHeave::Statistics WienerHeave::statistics(int segment, double mean, double
   if (taps == 0)
   {
     const double span = std::clamp(kSpanPeriods / out.peak_frequency, kMinSpan, kMaxSpan);
-    taps = std::min(static_cast<int>(std::lround(span * fs)), kDftSize / 2);
+    // No longer than the input held since reset() (less the low-pass's start): beyond it the FIR
+    // would read the history's zeros, not the sea.
+    const int held = static_cast<int>(samples_ / decimation_) - 2;
+    taps = std::max(1, std::min({ static_cast<int>(std::lround(span * fs)), kDftSize / 2, held, ring_length_ }));
   }
 
   // Correlations at lags 0..taps-1: the inverse transforms of the (Hermitian) spectra, the

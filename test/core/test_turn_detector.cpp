@@ -64,14 +64,14 @@ TEST(TurnDetector, HeadingOfAnAttitudeIsItsYaw)
 }
 
 // A moored buoy yawing 0.3 rad at 10 s about a heading across the +-pi seam: no turn, and the
-// share is allowed from kAfterTurn on, all the time.
+// share is allowed from kAfterStart on, all the time.
 TEST(TurnDetector, YawOfTheSeaIsNoTurn)
 {
   TurnDetector detector;
   const ShareRecord run = feed(&detector, 900.0, [](double t) { return M_PI + 0.3 * std::sin(2.0 * M_PI * 0.1 * t); });
   EXPECT_EQ(run.turns, 0);
-  EXPECT_NEAR(run.first_allowed, TurnDetector::kAfterTurn, 1.0);
-  EXPECT_NEAR(run.allowed_time, 900.0 - TurnDetector::kAfterTurn, 1.0);
+  EXPECT_NEAR(run.first_allowed, TurnDetector::kAfterStart, 1.0);
+  EXPECT_NEAR(run.allowed_time, 900.0 - TurnDetector::kAfterStart, 1.0);
 }
 
 // A 90 degree turn at 0.03 rad/s after 300 s of steady heading: it is told as a turn (more than
@@ -127,6 +127,6 @@ TEST(TurnDetector, ResetStartsTheHoldAgain)
   detector.reset();
   const ShareRecord run = feed(&detector, 200.0, [](double) { return 2.0; });
   EXPECT_EQ(run.turns, 0);
-  EXPECT_NEAR(run.first_allowed, TurnDetector::kAfterTurn, 1.0);
+  EXPECT_NEAR(run.first_allowed, TurnDetector::kAfterStart, 1.0);
 }
 }  // namespace periodic_bias_compensation

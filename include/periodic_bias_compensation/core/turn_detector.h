@@ -9,11 +9,13 @@
 //   at the wave band's lower edge, so not while the ship turns. The 2 s mean yaw rate beyond
 //   kTurnRate and beyond kYawSpreads times the spread the sea gives it (its deviation from the
 //   kSustainedTurnAveraging mean, over kYawSpreadAveraging) holds the share off while it lasts
-//   and kAfterYaw after; after a heading change (a turn, not a yaw of the sea) and after the
-//   start, kAfterTurn (the spectral FIR spans up to that). A vessel that yaws by degrees in waves
-//   keeps its share; a steady turn raises the spread to about 0.2 of its rate. Without a measured
-//   attitude (one level frame) the share stays off: the hull's roll and pitch leak g sin(angle)
-//   into the level axes in the wave band.
+//   and kAfterYaw after; after a heading change (a turn, not a yaw of the sea) kAfterTurn (the
+//   spectral FIR spans up to that: it would still read the sea before the turn); after the start
+//   kAfterStart (WienerHeave's FIR reads only the input it holds, but the measure of what the
+//   harmonic model misses still holds its lock's first transients). A vessel that yaws by degrees
+//   in waves keeps its share; a steady turn raises the spread to about 0.2 of its rate. Without a
+//   measured attitude (one level frame) the share stays off: the hull's roll and pitch leak
+//   g sin(angle) into the level axes in the wave band.
 //
 // Threading: not thread-safe; the owner serialises calls.
 #pragma once
@@ -35,8 +37,10 @@ public:
   /// [rad/s] (wave-induced yaw of a few degrees at 5-15 s averages to a few mrad/s).
   static constexpr double kTurnAveraging = 2.0;
   static constexpr double kTurnRate = 0.008;
-  /// Time after a turn, and after the start, without a horizontal share [s].
+  /// Time after a turn without a horizontal share [s].
   static constexpr double kAfterTurn = 120.0;
+  /// Time after the start without a horizontal share [s].
+  static constexpr double kAfterStart = 60.0;
   /// The longer yaw rate mean a turn is told by on a vessel that yaws in waves [s], the time over
   /// which the sea's spread of the 2 s mean about it is measured [s], and how many such spreads
   /// make a turn [-].
@@ -65,7 +69,7 @@ public:
   /// The horizontal axes may take a broadband wave share.
   bool horizontalShareAllowed() const
   {
-    return since_start_ >= kAfterTurn && since_turn_ >= (turn_confirmed_ ? kAfterTurn : kAfterYaw);
+    return since_start_ >= kAfterStart && since_turn_ >= (turn_confirmed_ ? kAfterTurn : kAfterYaw);
   }
 
 private:

@@ -17,8 +17,8 @@
 //     from that the cross-correlation between displacement (acceleration / -omega^2) and the
 //     low-passed acceleration, and the acceleration's autocorrelation from the same spectrum;
 //  3. solves the Wiener-Hopf (normal) equations for a causal FIR over a span of six peak
-//     periods (kSpanPeriods, kMinSpan..kMaxSpan) at the design rate, for displacement and
-//     velocity (Levinson recursion);
+//     periods (kSpanPeriods, kMinSpan..kMaxSpan; no longer than the input held since reset())
+//     at the design rate, for displacement and velocity (Levinson recursion);
 //  4. applies the FIR at every sample to the low-passed values D samples apart ending at that
 //     sample, so the output has the input's rate; a new design fades in over kDesignFade.
 //
@@ -68,6 +68,7 @@ public:
   static constexpr double kDesignFade = 2.0;             ///< [s]
   static constexpr double kMinPeriod = 1e-4;             ///< shortest sample period taken (10 kHz) [s]
   static constexpr double kMaxPeriod = 10.0;             ///< longest [s]
+  static constexpr int kStartSteps = 32;                 ///< steps that size the buffers
 
   /// min_frequency [Hz]: the lowest wave frequency; below it nothing is heave.
   explicit WienerHeave(double min_frequency = 0.04);
@@ -80,9 +81,10 @@ public:
   void restartRecord();
   void setMinFrequency(double min_frequency);
 
-  /// Takes the vertical acceleration a [m/s^2] (gravity removed), the sample period dt [s]
-  /// (constant over a record: a change of rate needs reset()) and the white-noise density of the
-  /// acceleration squared, one-sided [(m/s^2)^2/Hz], used at the next design.
+  /// Takes the vertical acceleration a [m/s^2] (gravity removed), the step dt [s] since the
+  /// previous sample (the rate constant over a record: a change of rate needs reset()) and the
+  /// white-noise density of the acceleration squared, one-sided [(m/s^2)^2/Hz], used at the next
+  /// design.
   WienerHeaveOutput update(double a, double dt, double noise_density_squared);
 
   /// A design has been made since the last reset() (it may be stale after restartRecord()).
@@ -128,7 +130,15 @@ private:
   void apply(const Design& d, double* x, double* v) const;
 
   double min_frequency_;
+  /// Takes a step into dt_'s mean unless it is no period (outside 0.5..2 dt_).
+  void addStep(double dt);
+
+  /// The sample period: the mean of the steps since reset() [s] (a step stamped early or late, as
+  /// a driver's jitter makes it before the owner knows the rate, moves it by its share only).
   double dt_ = 0.0;
+  double steps_sum_ = 0.0;           ///< of the steps in dt_'s mean [s]
+  long steps_ = 0;                   ///< in it
+  std::vector<double> start_steps_;  ///< the first kStartSteps steps, before anything is sized
   int decimation_ = 0;
   // Two moving averages of decimation_ samples.
   std::vector<double> first_, second_;
