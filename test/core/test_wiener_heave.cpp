@@ -2,6 +2,7 @@
 // here (not the simulator's), with bias wander, at several rates; nothing when there is no sea.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <random>
@@ -164,6 +165,31 @@ TEST(WienerHeave, AnyInputRate)
   EXPECT_EQ(heave.decimation(), 0);
   heave.update(0.0, 1.0 / 87.7, 1e-5);
   EXPECT_EQ(heave.decimation(), 44);
+}
+
+// A swell of 20 s: the FIR spans six peak periods (120 s at most), but never more than the input
+// held since the start (the first design, from about 50 s, would read zeros beyond it).
+TEST(WienerHeave, FirstDesignsReadOnlyTheInputHeld)
+{
+  const Sea swell(1.0 / 20.0, 2.5, 3);
+  const double rate = 20.0;
+  WienerHeave heave(0.03);
+  double first_span = 0.0, first_time = 0.0;
+  for (long i = 0; i < static_cast<long>(400 * rate); ++i)
+  {
+    double x, v, a;
+    swell.at(i / rate, &x, &v, &a);
+    heave.update(a, 1.0 / rate, 1e-5);
+    if (first_span == 0.0 && heave.span() > 0.0)
+    {
+      first_span = heave.span();
+      first_time = i / rate;
+    }
+  }
+  ASSERT_GT(first_span, 0.0);
+  EXPECT_LE(first_span, first_time);
+  EXPECT_GT(first_span, 0.8 * first_time);
+  EXPECT_NEAR(heave.span(), std::min(WienerHeave::kMaxSpan, WienerHeave::kSpanPeriods / heave.peakFrequency()), 1.0);
 }
 
 // Stamps jittered by up to a quarter period while the driver starts (steps of 0.5-1.5 periods):

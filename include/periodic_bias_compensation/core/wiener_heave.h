@@ -102,6 +102,12 @@ public:
   {
     return peak_frequency_;
   }
+  /// The input the current design's FIR reads, taps times the design rate's spacing [s] (0: no
+  /// design yet).
+  double span() const
+  {
+    return current_ ? static_cast<double>(current_->position.size()) * decimation_ * dt_ : 0.0;
+  }
 
 private:
   struct Design
