@@ -65,7 +65,7 @@ void WienerHeave::setMinFrequency(double min_frequency)
 
 void WienerHeave::reset()
 {
-  dt_ = 0.0;
+  dt_ = sized_dt_ = 0.0;
   steps_sum_ = 0.0;
   steps_ = 0;
   start_steps_.clear();
@@ -95,8 +95,9 @@ void WienerHeave::restartRecord()
 
 void WienerHeave::addStep(double dt)
 {
-  // A lost sample's double step, or a glitch, is no period.
-  if (!(dt > 0.5 * dt_ && dt < 2.0 * dt_))
+  // A lost sample's double step, or a glitch, is no period; a step jittered by up to three
+  // quarters of one either way is (its neighbour makes up for it).
+  if (!(dt > 0.25 * sized_dt_ && dt < 1.75 * sized_dt_))
     return;
   steps_sum_ += dt;
   dt_ = steps_sum_ / static_cast<double>(++steps_);
@@ -119,7 +120,7 @@ WienerHeaveOutput WienerHeave::update(double a, double dt, double noise_density_
       return out;
     std::vector<double> sorted = start_steps_;
     std::nth_element(sorted.begin(), sorted.begin() + kStartSteps / 2, sorted.end());
-    dt_ = sorted[kStartSteps / 2];
+    dt_ = sized_dt_ = sorted[kStartSteps / 2];
     decimation_ = std::max(1, static_cast<int>(std::lround(kDesignPeriod / dt_)));
     for (double step : start_steps_)
       addStep(step);

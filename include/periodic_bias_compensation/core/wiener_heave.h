@@ -134,14 +134,14 @@ private:
   Statistics statistics(int segment, double mean, double noise_density_squared, int taps) const;
   void design(double noise_density_squared);
   void apply(const Design& d, double* x, double* v) const;
-
-  double min_frequency_;
-  /// Takes a step into dt_'s mean unless it is no period (outside 0.5..2 dt_).
+  /// Takes a step into dt_'s mean unless it is no period (outside 0.25..1.75 sized_dt_).
   void addStep(double dt);
 
+  double min_frequency_;
   /// The sample period: the mean of the steps since reset() [s] (a step stamped early or late, as
   /// a driver's jitter makes it before the owner knows the rate, moves it by its share only).
   double dt_ = 0.0;
+  double sized_dt_ = 0.0;            ///< the median of the first kStartSteps steps [s]
   double steps_sum_ = 0.0;           ///< of the steps in dt_'s mean [s]
   long steps_ = 0;                   ///< in it
   std::vector<double> start_steps_;  ///< the first kStartSteps steps, before anything is sized
