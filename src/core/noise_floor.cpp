@@ -7,13 +7,8 @@
 
 namespace periodic_bias_compensation
 {
-NoiseFloor::NoiseFloor() : block_(kBlock, 0.0), window_(kBlock), bins_(kBlock / 4)
+NoiseFloor::NoiseFloor() : block_(kBlock, 0.0), window_(hannWindow(kBlock, &window_power_)), bins_(kBlock / 4)
 {
-  for (int i = 0; i < kBlock; ++i)
-  {
-    window_[i] = 0.5 - 0.5 * std::cos(2.0 * M_PI * i / kBlock);
-    window_power_ += window_[i] * window_[i];
-  }
 }
 
 void NoiseFloor::reset()

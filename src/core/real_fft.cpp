@@ -1,5 +1,7 @@
 #include "real_fft.h"
 
+#include <cmath>
+
 #include <sys/resource.h>
 #include <sys/syscall.h>
 #include <unistd.h>
@@ -12,6 +14,20 @@
 
 namespace periodic_bias_compensation
 {
+std::vector<double> hannWindow(int n, double* power)
+{
+  std::vector<double> window(n);
+  double sum = 0.0;
+  for (int i = 0; i < n; ++i)
+  {
+    window[i] = 0.5 - 0.5 * std::cos(2.0 * M_PI * i / n);
+    sum += window[i] * window[i];
+  }
+  if (power)
+    *power = sum;
+  return window;
+}
+
 int fastFftSize(int n)
 {
   for (int m = n;; ++m)

@@ -13,6 +13,10 @@ namespace periodic_bias_compensation
 /// 2631 = 3 x 877 samples would need a prime-size transform).
 int fastFftSize(int n);
 
+/// The periodic Hann window of n samples, 0.5 - 0.5 cos(2 pi i / n), and in *power (if given)
+/// the sum of its squares.
+std::vector<double> hannWindow(int n, double* power = nullptr);
+
 /// Runs `task` on the core's background planning thread (one per process, at nice 19, so that it
 /// leaves the core to the threads that feed samples), in the order given. FFTW plans a transform
 /// size it has not seen in milliseconds: that is done there, not in a sample's call.

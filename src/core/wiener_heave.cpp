@@ -225,13 +225,8 @@ WienerHeave::Statistics WienerHeave::statistics(int segment, double mean, double
   // Welch: two-sided density [(m/s^2)^2/Hz] at kDftSize / 2 + 1 frequencies.
   const int bins = kDftSize / 2 + 1;
   std::vector<double> density(bins, 0.0);
-  std::vector<double> window(segment);
   double window_power = 0.0;
-  for (int i = 0; i < segment; ++i)
-  {
-    window[i] = 0.5 - 0.5 * std::cos(2.0 * M_PI * i / segment);
-    window_power += window[i] * window[i];
-  }
+  const std::vector<double> window = hannWindow(segment, &window_power);
   int segments = 0;
   for (int start = n - segment; start >= 0; start -= std::max(1, segment / 2), ++segments)
   {

@@ -43,8 +43,8 @@ private:
   std::vector<double> block_;
   int filled_ = 0;
   double variance_ = 0.0;
+  double window_power_ = 0.0;  ///< sum of squares of window_, set with it (declared first)
   std::vector<double> window_;
-  double window_power_ = 0.0;
   std::vector<double> bins_;
   /// The transform, made at the first block.
   UnsharedTransform transform_;
