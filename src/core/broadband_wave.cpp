@@ -64,9 +64,6 @@ BroadbandWaveOutput BroadbandWave::update(const BroadbandWaveInput& in)
   const bool four_passes = vertical_ && !spectral_.designed();
   out.position_variance = fixed_.positionVariance(density);
   out.velocity_variance = fixed_.velocityVariance(density);
-  // The share below weighs the spectral design by its own figure; the published variance is the
-  // checked one (WienerHeave: a design from one periodogram fits its scatter too).
-  double own_variance = out.position_variance;
   if (spectral_share_ > 0.0)
   {
     const double share = spectral_share_;
@@ -74,7 +71,6 @@ BroadbandWaveOutput BroadbandWave::update(const BroadbandWaveInput& in)
     out.estimate.velocity += share * (spectral.velocity - out.estimate.velocity);
     out.position_variance += share * (spectral.error_variance - out.position_variance);
     out.velocity_variance += share * (spectral.velocity_error_variance - out.velocity_variance);
-    own_variance += share * (spectral.fit_error_variance - own_variance);
   }
   if (dt > 0.0)
   {
@@ -137,7 +133,7 @@ BroadbandWaveOutput BroadbandWave::update(const BroadbandWaveInput& in)
   const double omega_h = 2.0 * M_PI * min_frequency_;
   const double noise = noiseDensitySquared(in.rate) / ((four_passes ? 64.0 : 8.0) * omega_h * omega_h * omega_h);
   const double missed = std::max(0.0, residual_band_variance_[four_passes ? kFourPasses : kTwoPasses] - noise);
-  const double broadband = own_variance + std::max(low_variance_, low_.back() * low_.back());
+  const double broadband = out.position_variance + std::max(low_variance_, low_.back() * low_.back());
   double target = missed > 0.0 ? missed / (missed + broadband) : 0.0;
   // The residual sees only the wave band: bias wander below it never opens the share. But a model
   // locked elsewhere fits the acceleration and still turns it into the wrong displacement (it

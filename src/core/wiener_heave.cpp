@@ -156,7 +156,8 @@ WienerHeaveOutput WienerHeave::update(double a, double dt, double noise_density_
   since_design_ += dt_;
   const double recorded = decimated_.size() * decimation_ * dt_;
   const double interval = recorded < kEarlyRecord ? kEarlyRedesignInterval : kRedesignInterval;
-  if ((current_ && !stale_ ? since_design_ >= interval : recorded >= kFirstDesign) &&
+  const double first = current_ ? kRestartDesign : kFirstDesign;
+  if ((current_ && !stale_ ? since_design_ >= interval : recorded >= first) &&
       static_cast<int>(decimated_.size()) >= kMinSegment)
   {
     design(noise_density_squared);
@@ -167,7 +168,6 @@ WienerHeaveOutput WienerHeave::update(double a, double dt, double noise_density_
   apply(*current_, &out.position, &out.velocity);
   out.error_variance = current_->error_variance;
   out.velocity_error_variance = current_->velocity_error_variance;
-  out.fit_error_variance = current_->fit_error_variance;
   if (previous_)
   {
     fade_ = std::min(1.0, fade_ + dt_ / kDesignFade);
@@ -344,22 +344,8 @@ void WienerHeave::design(double noise_density_squared)
   if (!solveToeplitz(fit.autocorrelation, fit.r_position, &next->position) ||
       !solveToeplitz(fit.autocorrelation, fit.r_velocity, &next->velocity))
     return;  // keep the last design
-  // The expected error E[(x - h a)^2] = var(x) - 2 h r + h R h of taps h under other statistics;
-  // under those they were solved from (R h = r), var(x) - h r.
-  const auto error = [](const std::vector<double>& h, const std::vector<double>& r, const std::vector<double>& R,
-                        double variance) {
-    const int taps = static_cast<int>(h.size());
-    double cross = 0.0, quadratic = 0.0;
-    for (int i = 0; i < taps; ++i)
-    {
-      cross += h[i] * r[i];
-      double row = R[0] * h[i];
-      for (int j = i + 1; j < taps; ++j)
-        row += 2.0 * R[j - i] * h[j];
-      quadratic += h[i] * row;
-    }
-    return std::max(0.0, variance - 2.0 * cross + quadratic);
-  };
+  // The expected error E[(x - h a)^2] = var(x) - h r of taps solved from these statistics
+  // (R h = r).
   double explained = 0.0, explained_velocity = 0.0;
   for (std::size_t i = 0; i < next->position.size(); ++i)
   {
@@ -368,29 +354,6 @@ void WienerHeave::design(double noise_density_squared)
   }
   next->error_variance = std::max(0.0, fit.displacement_variance - explained);
   next->velocity_error_variance = std::max(0.0, fit.velocity_variance - explained_velocity);
-  next->fit_error_variance = next->error_variance;
-  if (whole)
-  {
-    // Taps fitted to one periodogram fit its scatter too (each bin scatters by its own size), and
-    // their own error figure takes that for accuracy: they are also scored under a smoother
-    // estimate of the same record, three segments of half its length, and the larger error holds.
-    const Statistics check = statistics(std::max(kMinSegment / 2, n / 2), mean, noise_density_squared,
-                                        static_cast<int>(next->position.size()));
-    if (!check.autocorrelation.empty())
-    {
-      next->error_variance = std::max(next->error_variance, error(next->position, check.r_position,
-                                                                  check.autocorrelation, check.displacement_variance));
-      next->velocity_error_variance =
-          std::max(next->velocity_error_variance,
-                   error(next->velocity, check.r_velocity, check.autocorrelation, check.velocity_variance));
-    }
-    else
-    {
-      // The smoother estimate holds no wave: all of the output may be error.
-      next->error_variance = std::max(next->error_variance, fit.displacement_variance);
-      next->velocity_error_variance = std::max(next->velocity_error_variance, fit.velocity_variance);
-    }
-  }
   next->mean = mean;
   previous_ = std::move(current_);
   current_ = std::move(next);

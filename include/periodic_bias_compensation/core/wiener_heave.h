@@ -24,7 +24,8 @@
 //
 // Below min_frequency and under the noise floor the filter passes nothing, so bias wander and
 // white noise are weighted by what the spectrum holds, not by a fixed corner. Until the first
-// design (kFirstDesign of data) it has no output: the owner uses another estimate.
+// design (kFirstDesign of data, kRestartDesign after restartRecord()) it has no output: the owner
+// uses another estimate.
 //
 // Threading: not thread-safe; the owner serialises calls.
 #pragma once
@@ -44,22 +45,20 @@ struct WienerHeaveOutput
   double velocity = 0.0;                 ///< [m/s]
   double error_variance = 0.0;           ///< the design's expected displacement error variance [m^2]
   double velocity_error_variance = 0.0;  ///< [m^2/s^2]
-  /// The design's own figure, before the check of a design from one periodogram (equal to
-  /// error_variance for designs from averaged segments) [m^2].
-  double fit_error_variance = 0.0;
 };
 
 class WienerHeave
 {
 public:
   static constexpr double kDesignPeriod = 0.5;           ///< target spacing of the design rate [s]
-  static constexpr double kFirstDesign = 50.0;           ///< data before the first design [s]
+  static constexpr double kFirstDesign = 20.0;           ///< data before the first design [s]
+  static constexpr double kRestartDesign = 50.0;         ///< of a record restartRecord() began [s]
   static constexpr double kDesignWindow = 600.0;         ///< data a design uses at most [s]
   static constexpr double kRedesignInterval = 30.0;      ///< [s]
   static constexpr double kEarlyRedesignInterval = 5.0;  ///< while the record is short [s]
   static constexpr double kEarlyRecord = 300.0;          ///< a record shorter than this is short [s]
   static constexpr int kSegment = 256;                   ///< Welch segment [design-rate samples]
-  static constexpr int kMinSegment = 64;                 ///< the shortest record designed from
+  static constexpr int kMinSegment = 40;                 ///< the shortest record designed from
   static constexpr int kDftSize = 1024;                  ///< zero-padded transform of a segment
   static constexpr double kSpanPeriods = 6.0;            ///< FIR span in peak periods
   static constexpr double kMinSpan = 20.0;               ///< [s]
@@ -77,7 +76,7 @@ public:
   void reset();
   /// The sea as met has changed (the ship turned, so every encounter frequency moved): the
   /// spectrum is measured anew from the next sample. The last design stays applied but is marked
-  /// stale (`valid` false) until the first design from the new record, kFirstDesign of it.
+  /// stale (`valid` false) until the first design from the new record, kRestartDesign of it.
   void restartRecord();
   void setMinFrequency(double min_frequency);
 
@@ -117,7 +116,6 @@ private:
     double mean = 0.0;  ///< the design window's mean acceleration, taken off first
     double error_variance = 0.0;
     double velocity_error_variance = 0.0;
-    double fit_error_variance = 0.0;
   };
   /// What a design takes from a spectrum estimate of the record (Welch, Hann segments of
   /// `segment` design-rate values, half overlap): correlations at lags 0..taps-1 (taps 0: six
