@@ -149,6 +149,12 @@ BroadbandWaveOutput BroadbandWave::update(const BroadbandWaveInput& in)
   if (target >= kMinWeight && spectral.valid && in.locked && in.frequency > 0.0 && peak > 0.0 &&
       wave_variance_ > kSeaOverError * broadband && std::abs(in.frequency - peak) > kOffPeak * peak)
     target = 1.0;
+  // Without a lock the harmonic model's output is none: a spectral design that holds a sea (its
+  // wave kSeaOverError times its error, and the output as much over the broadband error) is then
+  // the whole output. At rest the design holds no wave, or none above its error.
+  if (!in.locked && spectral.valid && spectral.wave_variance > kSeaOverError * spectral.error_variance &&
+      wave_variance_ > kSeaOverError * broadband)
+    target = 1.0;
   // What the harmonic model's displacement misses: with a lock, what the residual or the difference
   // says; without one its output is none, so the whole wave. Velocity in proportion, at the
   // broadband estimate's own ratio of velocity to displacement.

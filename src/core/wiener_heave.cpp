@@ -168,6 +168,7 @@ WienerHeaveOutput WienerHeave::update(double a, double dt, double noise_density_
   apply(*current_, &out.position, &out.velocity);
   out.error_variance = current_->error_variance;
   out.velocity_error_variance = current_->velocity_error_variance;
+  out.wave_variance = current_->wave_variance;
   if (previous_)
   {
     fade_ = std::min(1.0, fade_ + dt_ / kDesignFade);
@@ -353,6 +354,7 @@ void WienerHeave::design(double noise_density_squared)
     explained_velocity += next->velocity[i] * fit.r_velocity[i];
   }
   next->error_variance = std::max(0.0, fit.displacement_variance - explained);
+  next->wave_variance = fit.displacement_variance;
   next->velocity_error_variance = std::max(0.0, fit.velocity_variance - explained_velocity);
   next->mean = mean;
   previous_ = std::move(current_);

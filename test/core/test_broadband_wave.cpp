@@ -118,6 +118,29 @@ TEST(BroadbandWave, BroadSeaTakesOverVertically)
   EXPECT_GT(out.position_variance, 0.0);
 }
 
+// Before any lock the harmonic model gives nothing: once the spectral estimate holds the sea, the
+// vertical axis takes it whole, and it follows the displacement.
+TEST(BroadbandWave, WithoutALockTheSpectralEstimateTakesTheSea)
+{
+  const BroadSea sea(0.5, 4);
+  BroadbandWave wave(true);
+  std::mt19937_64 rng(4);
+  double t = 0.0, largest = 0.0;
+  feed(&wave, &sea, WienerHeave::kFirstDesign - 5.0, true, &t, &rng, &largest, false);
+  EXPECT_EQ(largest, 0.0) << "before the first design";
+  EXPECT_GT(feed(&wave, &sea, 30.0, true, &t, &rng, nullptr, false).weight, 0.95);
+  double error2 = 0.0, truth2 = 0.0;
+  for (int k = 0; k < 60 * static_cast<int>(kRate); ++k)
+  {
+    const BroadbandWaveOutput o = feed(&wave, &sea, 1.0 / kRate, true, &t, &rng, nullptr, false);
+    double x, a;
+    sea.at(t - 1.0 / kRate, &x, &a);
+    error2 += std::pow(o.weight * o.estimate.position - x, 2);
+    truth2 += x * x;
+  }
+  EXPECT_LT(std::sqrt(error2 / truth2), 0.3);
+}
+
 // Horizontally: no share before the spectral estimate exists (the fixed filter never stands in),
 // a share once it does, and out within a second of being blocked (a turn).
 TEST(BroadbandWave, HorizontalOnlySpectralAndBlockable)

@@ -28,7 +28,10 @@
 //    broad sea lies above the displacement's (the spectra are a factor omega^4 apart), so the
 //    harmonic model misses most of the displacement while both measures of its miss read low
 //    (the residual's high-passes take the low frequencies, and the two displacements' errors are
-//    not independent).
+//    not independent);
+//  - without a lock (the harmonic model's output is then none), the whole of it once the spectral
+//    estimate holds a sea (its wave kSeaOverError times its error, and its output's mean square
+//    as much over the broadband error).
 // While the ship turns, the spectrum is measured anew (WienerHeave::restartRecord); the vertical
 // axis crosses over to the fixed filter with WienerHeave::kDesignFade and back once the new record
 // gives a design. A horizontal axis takes the spectral estimate only, and none while the owner says it may not

@@ -45,6 +45,8 @@ struct WienerHeaveOutput
   double velocity = 0.0;                 ///< [m/s]
   double error_variance = 0.0;           ///< the design's expected displacement error variance [m^2]
   double velocity_error_variance = 0.0;  ///< [m^2/s^2]
+  /// The displacement variance of the wave in the design's spectrum (0 when it holds none) [m^2].
+  double wave_variance = 0.0;
 };
 
 class WienerHeave
@@ -116,6 +118,7 @@ private:
     double mean = 0.0;  ///< the design window's mean acceleration, taken off first
     double error_variance = 0.0;
     double velocity_error_variance = 0.0;
+    double wave_variance = 0.0;
   };
   /// What a design takes from a spectrum estimate of the record (Welch, Hann segments of
   /// `segment` design-rate values, half overlap): correlations at lags 0..taps-1 (taps 0: six
