@@ -143,17 +143,18 @@ BroadbandWaveOutput BroadbandWave::update(const BroadbandWaveInput& in)
   if (target >= kMinWeight && difference_variance_ > broadband)
     target = std::max(target, 1.0 - broadband / difference_variance_);
   // A lock away from the displacement's peak describes the wrong part of the sea, and both
-  // measures above read its miss low (figures: docs/benchmarks.md, "Heave blend").
+  // measures above read its miss low (figures: docs/benchmarks.md, "Heave blend"). Either a
+  // measured miss or a spectral design that holds a sea (its wave kSeaOverError times its
+  // expected error; at rest none above its error) opens the share then, and only where the
+  // broadband output holds a sea too (at rest its output is its own error).
   const double peak = spectral_.peakFrequency();
-  // Only where the broadband estimate holds a sea (at rest its output is its own error).
-  if (target >= kMinWeight && spectral.valid && in.locked && in.frequency > 0.0 && peak > 0.0 &&
+  const bool holds_sea = spectral.valid && spectral.wave_variance > kSeaOverError * spectral.error_variance;
+  if ((target >= kMinWeight || holds_sea) && spectral.valid && in.locked && in.frequency > 0.0 && peak > 0.0 &&
       wave_variance_ > kSeaOverError * broadband && std::abs(in.frequency - peak) > kOffPeak * peak)
     target = 1.0;
-  // Without a lock the harmonic model's output is none: a spectral design that holds a sea (its
-  // wave kSeaOverError times its error, and the output as much over the broadband error) is then
-  // the whole output. At rest the design holds no wave, or none above its error.
-  if (!in.locked && spectral.valid && spectral.wave_variance > kSeaOverError * spectral.error_variance &&
-      wave_variance_ > kSeaOverError * broadband)
+  // Without a lock the harmonic model's output is none: a design that holds a sea, with an output
+  // kSeaOverError times the broadband error, is then the whole output.
+  if (!in.locked && holds_sea && wave_variance_ > kSeaOverError * broadband)
     target = 1.0;
   // What the harmonic model's displacement misses: with a lock, what the residual or the difference
   // says; without one its output is none, so the whole wave. Velocity in proportion, at the

@@ -215,6 +215,35 @@ TEST(BroadbandWave, TurnHandsTheVerticalToTheFixedFilterAndBack)
 // turns into far too little displacement (it divides by its own frequency squared): the
 // acceleration residual is small, the displacement error large. The lock lies far from the
 // displacement spectrum's peak, so the broadband estimate takes the whole wave output.
+// A model locked well above the displacement's peak whose residual shows no miss yet (its first
+// minute): the spectral design alone, once it holds the sea, gives it the whole share.
+TEST(BroadbandWave, ALockOffThePeakGivesWayOnceTheDesignHoldsTheSea)
+{
+  const BroadSea sea(0.5, 6);
+  BroadbandWave wave(true);
+  std::mt19937_64 rng(6);
+  std::normal_distribution<double> normal(0.0, 0.004 * std::sqrt(kRate / 2.0));
+  double smallest_weight = 1.0;
+  for (long i = 0; i < static_cast<long>((WienerHeave::kFirstDesign + 40.0) * kRate); ++i)
+  {
+    const double t = i / kRate;
+    double x = 0.0, a = 0.0;
+    sea.at(t, &x, &a);
+    BroadbandWaveInput in;
+    in.raw = a + normal(rng);
+    in.offset_free = in.raw;
+    in.residual = 0.0;
+    in.locked = true;
+    in.frequency = 0.6;
+    in.dt = i > 0 ? 1.0 / kRate : 0.0;
+    in.rate = kRate;
+    const BroadbandWaveOutput out = wave.update(in);
+    if (t > WienerHeave::kFirstDesign + 20.0)
+      smallest_weight = std::min(smallest_weight, out.weight);
+  }
+  EXPECT_GT(smallest_weight, 0.95);
+}
+
 TEST(BroadbandWave, ModelLockedElsewhereGivesWayToTheBroadbandEstimate)
 {
   std::mt19937_64 rng(5);

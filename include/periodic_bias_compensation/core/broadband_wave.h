@@ -22,7 +22,8 @@
 //  - the broadband share V_missed / (V_missed + V_broadband), zero below kMinWeight, is followed
 //    with kWeightTime: a narrow sea (the bench) or none (at rest) keeps the harmonic model
 //    whatever the bias does; a broad one (JONSWAP) takes the broadband estimate;
-//  - once that share is open, the whole of it when the lock lies more than kOffPeak from the peak
+//  - once that share is open, or the spectral design holds a sea (its wave kSeaOverError times its
+//    expected error), the whole of it when the lock lies more than kOffPeak from the peak
 //    of the spectral estimate's displacement spectrum and that estimate holds a sea (its mean
 //    square kSeaOverError times its error): the lock follows the acceleration's peak, which on a
 //    broad sea lies above the displacement's (the spectra are a factor omega^4 apart), so the
