@@ -143,14 +143,16 @@ BroadbandWaveOutput BroadbandWave::update(const BroadbandWaveInput& in)
   if (target >= kMinWeight && difference_variance_ > broadband)
     target = std::max(target, 1.0 - broadband / difference_variance_);
   // A lock away from the displacement's peak describes the wrong part of the sea, and both
-  // measures above read its miss low (figures: docs/benchmarks.md, "Heave blend"). Either a
-  // measured miss or a spectral design that holds a sea (its wave kSeaOverError times its
-  // expected error; at rest none above its error) opens the share then, and only where the
-  // broadband output holds a sea too (at rest its output is its own error).
+  // measures above read its miss low (figures: docs/benchmarks.md, "Heave blend"). The whole share
+  // goes to the broadband estimate then, where there is a sea: the spectral design holds one (its
+  // wave kSeaOverError times its expected error; at rest none above its error), or a measured miss
+  // opened the share and the broadband output holds one (at rest its output is its own error; its
+  // mean square since the start lags a design).
   const double peak = spectral_.peakFrequency();
   const bool holds_sea = spectral.valid && spectral.wave_variance > kSeaOverError * spectral.error_variance;
-  if ((target >= kMinWeight || holds_sea) && spectral.valid && in.locked && in.frequency > 0.0 && peak > 0.0 &&
-      wave_variance_ > kSeaOverError * broadband && std::abs(in.frequency - peak) > kOffPeak * peak)
+  const bool output_holds_sea = target >= kMinWeight && wave_variance_ > kSeaOverError * broadband;
+  if ((holds_sea || output_holds_sea) && spectral.valid && in.locked && in.frequency > 0.0 && peak > 0.0 &&
+      std::abs(in.frequency - peak) > kOffPeak * peak)
     target = 1.0;
   // Without a lock the harmonic model's output is none: a design that holds a sea, with an output
   // kSeaOverError times the broadband error, is then the whole output.
