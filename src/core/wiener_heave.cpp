@@ -218,7 +218,7 @@ void WienerHeave::apply(const Design& d, double* x, double* v) const
   *v = (pv[0] + pv[1]) + (pv[2] + pv[3]);
 }
 
-WienerHeave::Statistics WienerHeave::statistics(int segment, double mean, double noise_density_squared, int taps) const
+WienerHeave::Statistics WienerHeave::statistics(int segment, double mean, double noise_density_squared) const
 {
   RealFft& fft = *transform_.fft;
   const int n = static_cast<int>(decimated_.size());
@@ -285,14 +285,12 @@ WienerHeave::Statistics WienerHeave::statistics(int segment, double mean, double
   }
   if (!(peak > 0.0))
     return out;  // no wave in the spectrum
-  if (taps == 0)
-  {
-    const double span = std::clamp(kSpanPeriods / out.peak_frequency, kMinSpan, kMaxSpan);
-    // No longer than the input held since reset() (less the low-pass's start): beyond it the FIR
-    // would read the history's zeros, not the sea.
-    const int held = static_cast<int>(samples_ / decimation_) - 2;
-    taps = std::max(1, std::min({ static_cast<int>(std::lround(span * fs)), kDftSize / 2, held, ring_length_ }));
-  }
+  const double span = std::clamp(kSpanPeriods / out.peak_frequency, kMinSpan, kMaxSpan);
+  // No longer than the input held since reset() (less the low-pass's start): beyond it the FIR
+  // would read the history's zeros, not the sea.
+  const int held = static_cast<int>(samples_ / decimation_) - 2;
+  const int taps =
+      std::max(1, std::min({ static_cast<int>(std::lround(span * fs)), kDftSize / 2, held, ring_length_ }));
 
   // Correlations at lags 0..taps-1: the inverse transforms of the (Hermitian) spectra, the
   // velocity's cross-spectrum j omega times the displacement's.
@@ -326,7 +324,7 @@ void WienerHeave::design(double noise_density_squared)
   // short record the resolution decides (a swell lies within the main lobe of short segments'
   // zero frequency), more than the variance that averaging segments removes.
   const bool whole = n < 2 * kSegment;
-  const Statistics fit = statistics(whole ? n : kSegment, mean, noise_density_squared, 0);
+  const Statistics fit = statistics(whole ? n : kSegment, mean, noise_density_squared);
   peak_frequency_ = fit.peak_frequency;
   if (fit.autocorrelation.empty())
   {

@@ -211,10 +211,6 @@ TEST(BroadbandWave, TurnHandsTheVerticalToTheFixedFilterAndBack)
               std::sqrt(error2 / truth2), std::sqrt(fixed_error2 / truth2));
 }
 
-// A long swell that the harmonic model, locked to a shorter period, fits in acceleration but
-// turns into far too little displacement (it divides by its own frequency squared): the
-// acceleration residual is small, the displacement error large. The lock lies far from the
-// displacement spectrum's peak, so the broadband estimate takes the whole wave output.
 // A model locked well above the displacement's peak whose residual shows no miss yet (its first
 // minute): the spectral design alone, once it holds the sea, gives it the whole share.
 TEST(BroadbandWave, ALockOffThePeakGivesWayOnceTheDesignHoldsTheSea)
@@ -244,6 +240,10 @@ TEST(BroadbandWave, ALockOffThePeakGivesWayOnceTheDesignHoldsTheSea)
   EXPECT_GT(smallest_weight, 0.95);
 }
 
+// A long swell that the harmonic model, locked to a shorter period, fits in acceleration but
+// turns into far too little displacement (it divides by its own frequency squared): the
+// acceleration residual is small, the displacement error large. The lock lies far from the
+// displacement spectrum's peak, so the broadband estimate takes the whole wave output.
 TEST(BroadbandWave, ModelLockedElsewhereGivesWayToTheBroadbandEstimate)
 {
   std::mt19937_64 rng(5);

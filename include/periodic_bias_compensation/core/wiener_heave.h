@@ -121,7 +121,7 @@ private:
     double wave_variance = 0.0;
   };
   /// What a design takes from a spectrum estimate of the record (Welch, Hann segments of
-  /// `segment` design-rate values, half overlap): correlations at lags 0..taps-1 (taps 0: six
+  /// `segment` design-rate values, half overlap): correlations at lags 0..taps-1 (taps: six
   /// periods of the displacement's peak, kMinSpan..kMaxSpan), empty when it holds no wave.
   struct Statistics
   {
@@ -132,7 +132,7 @@ private:
     double velocity_variance = 0.0;
     double peak_frequency = 0.0;  ///< of the displacement spectrum [Hz] (0: no wave)
   };
-  Statistics statistics(int segment, double mean, double noise_density_squared, int taps) const;
+  Statistics statistics(int segment, double mean, double noise_density_squared) const;
   void design(double noise_density_squared);
   void apply(const Design& d, double* x, double* v) const;
   /// Takes a step into dt_'s mean unless it is no period (outside 0.25..1.75 sized_dt_).
