@@ -193,7 +193,7 @@ TEST(BroadbandWave, TurnHandsTheVerticalToTheFixedFilterAndBack)
       largest_step_turn = std::max(largest_step_turn, step);
     if (t > turn_start + 15.0 && t < turn_end)
       fixed_gap_turn = std::max(fixed_gap_turn, std::abs(position - fixed_position));
-    if (t > turn_end + WienerHeave::kFirstDesign + 15.0)
+    if (t > turn_end + WienerHeave::kRestartDesign + 15.0)
       fixed_gap_after = std::max(fixed_gap_after, std::abs(position - fixed_position));
     if (t > turn_end + 180.0)  // the first designs of a new record are coarse
     {
