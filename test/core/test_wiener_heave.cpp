@@ -161,7 +161,7 @@ TEST(WienerHeave, AnyInputRate)
 }
 
 // A swell of 20 s: the FIR spans six peak periods (120 s at most), but never more than the input
-// held since the start (the first design, from about 50 s, would read zeros beyond it).
+// held since the start (the first design, from about 20 s, would read zeros beyond it).
 TEST(WienerHeave, FirstDesignsReadOnlyTheInputHeld)
 {
   const Sea swell(1.0 / 20.0, 2.5, 3);

@@ -25,11 +25,11 @@
 //  - the whole of it when the lock lies more than kOffPeak from the peak of the spectral
 //    estimate's displacement spectrum and there is a sea: the spectral design holds one (its wave
 //    kSeaOverError times its expected error), or the share is open and the broadband output holds
-//    one (its mean square kSeaOverError times its error): the lock follows the acceleration's peak, which on a
-//    broad sea lies above the displacement's (the spectra are a factor omega^4 apart), so the
-//    harmonic model misses most of the displacement while both measures of its miss read low
-//    (the residual's high-passes take the low frequencies, and the two displacements' errors are
-//    not independent);
+//    one (its mean square kSeaOverError times its error): the lock follows the acceleration's
+//    peak, which on a broad sea lies above the displacement's (the spectra are a factor omega^4
+//    apart), so the harmonic model misses most of the displacement while both measures of its
+//    miss read low (the residual's high-passes take the low frequencies, and the two
+//    displacements' errors are not independent);
 //  - without a lock (the harmonic model's output is then none), the whole of it once the spectral
 //    design holds a sea and the broadband output's mean square is kSeaOverError times its error.
 // While the ship turns, the spectrum is measured anew (WienerHeave::restartRecord); the vertical
