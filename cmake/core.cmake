@@ -13,6 +13,7 @@ add_library(${PROJECT_NAME}_core
   src/core/noise_floor.cpp
   src/core/lever_arm.cpp
   src/core/broadband_wave.cpp
+  src/core/wave_consistency.cpp
   src/core/harmonic_model.cpp
   src/core/paper_loop.cpp
   src/core/leveller.cpp
@@ -42,6 +43,7 @@ if(CATKIN_ENABLE_TESTING)
     test/core/test_wiener_heave.cpp
     test/core/test_noise_floor.cpp
     test/core/test_broadband_wave.cpp
+    test/core/test_wave_consistency.cpp
     test/core/test_harmonic_model.cpp
     test/core/test_paper_loop.cpp
     test/core/test_leveller.cpp

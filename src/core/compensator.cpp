@@ -10,6 +10,7 @@
 #include "periodic_bias_compensation/core/parameter_table.h"
 #include "periodic_bias_compensation/core/periodic_wave.h"
 #include "periodic_bias_compensation/core/turn_detector.h"
+#include "periodic_bias_compensation/core/wave_consistency.h"
 #include "real_fft.h"
 
 #include <algorithm>
@@ -149,6 +150,7 @@ struct AxisEstimator
   double residual_variance = 0.0;
   // Default mode with heave_filter: the broadband wave estimate and its share (broadbandWave).
   BroadbandWave broadband;
+  WaveConsistency consistency;  ///< default mode: the wave output held to the measured acceleration
 
   // Paper mode: Eq. 2-7 (stepPaper).
   PaperLoop paper;
@@ -186,7 +188,10 @@ public:
     config_ = config;
     if (restart_heave)
       for (AxisEstimator& axis : axes_)
+      {
         axis.broadband.configure(config_.heave_corner_frequency, config_.min_frequency);
+        axis.consistency.setMinFrequency(config_.min_frequency);
+      }
     if (restart_search && rate_ > 0.0)
     {
       planned_rate_ = rate_;
@@ -507,6 +512,7 @@ private:
       axis.slow_start = now_;
       axis.residual_variance = 0.0;
       axis.broadband = BroadbandWave(&axis == &axes_[2], config_.heave_corner_frequency, config_.min_frequency);
+      axis.consistency = WaveConsistency(config_.min_frequency);
       axis.paper.reset();
       axis.d_v = axis.d_p = 0.0;
       axis.time_since_reset = 0.0;
@@ -801,7 +807,16 @@ private:
 
     BroadbandWaveOutput broadband;
     if (config_.heave_filter && config_.enable_periodic)
+    {
       broadband = broadbandWave(axis, i, raw, residual, dt, &wave_a, &wave_x, &wave_v);
+      // No more wave than the measured acceleration shows (a model describing a motion that has
+      // stopped fades out); the slow channel then takes the measured acceleration itself.
+      const double noise = axis.broadband.noiseDensitySquared(rate_) * 0.5 * rate_;
+      const double consistent = axis.consistency.update(offsetFree(raw, i), wave_v, noise, dt);
+      wave_a *= consistent;
+      wave_x *= consistent;
+      wave_v *= consistent;
+    }
 
     // The slow motion: what the wave model leaves, through the drift observer.
     axis.drift.update(raw - wave_a, dt, config_.drift_time_constant, config_.enable_constant,

@@ -60,6 +60,8 @@ struct Outcome
   /// Largest |odometry/filtered + odometry/wave - true position| on the shaken axis from 1 s after
   /// a burst on [m].
   double after_burst = 0.0;
+  /// Largest |odometry/wave| over all axes from 3 s after a burst on [m].
+  double wave_after_burst = 0.0;
 };
 
 /// Largest |odometry/wave| and odometry/filtered excursion from the first output so far; returns
@@ -127,6 +129,8 @@ Outcome run(const Stream& stream, const pbc::CompensatorConfig& config = pbc::Co
       const int i = stream.shaken_axis;
       result.after_burst =
           std::max(result.after_burst, std::abs(out.position_filtered[i] + out.position_wave[i] - position));
+      if (t > stream.burst_end + 3.0)
+        result.wave_after_burst = std::max(result.wave_after_burst, out.position_wave.cwiseAbs().maxCoeff());
     }
     if (t < 20.0)
       result.max_filtered_20 = std::max(result.max_filtered_20, excursion);
@@ -252,6 +256,29 @@ TEST(RealWorldStreams, MotionThatStopsLeavesNoRamp)
     const Outcome r = run(s);
     RecordProperty("after_burst_" + std::to_string(axis), std::to_string(r.after_burst));
     EXPECT_LE(r.after_burst, 0.08) << "axis " << axis;
+  }
+}
+
+TEST(RealWorldStreams, MotionThatStopsLeavesNoWave)
+{
+  // Half a minute of a 1.3 Hz oscillation of 5 cm (a hand-driven rig), then rest: the spectral
+  // estimate designed on it is a FIR of 20 s and the harmonic model has a memory of several
+  // periods; both go on describing the oscillation after it has stopped unless the wave output is
+  // held to what the acceleration shows (without that, x and y show nearly twice the bound).
+  for (int axis = 0; axis < 3; ++axis)
+  {
+    std::mt19937_64 rng(4000 + axis);
+    Stream s = lowCostSensor(static_cast<unsigned>(axis + 1), rng);
+    s.duration = 45.0;
+    s.rate = 256.0;
+    s.shaken_axis = axis;
+    s.amplitude = 0.05;
+    s.frequency = 1.3;
+    s.burst_start = 8.0;
+    s.burst_end = 8.0 + 39.0 / 1.3;  // whole cycles, from rest to rest
+    const Outcome r = run(s);
+    RecordProperty("wave_after_burst_" + std::to_string(axis), std::to_string(r.wave_after_burst));
+    EXPECT_LE(r.wave_after_burst, 0.005) << "axis " << axis;
   }
 }
 
