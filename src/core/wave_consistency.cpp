@@ -11,6 +11,7 @@ void WaveConsistency::reset()
   previous_velocity_ = 0.0;
   samples_ = 0.0;
   elapsed_ = 0.0;
+  coefficients_dt_ = 0.0;
   weight_ = 1.0;
 }
 
@@ -36,17 +37,25 @@ double WaveConsistency::update(double measured, double velocity, double noise_va
   if (samples_ < 2.0)  // the output's acceleration needs two samples
     return weight_;
   const double n = samples_ - 1.0;
+  if (dt != coefficients_dt_)
+  {
+    // The step's filter coefficients, kept while the step is the same (a steady rate).
+    coefficients_dt_ = dt;
+    slow_ = 1.0 - std::exp(-2.0 * M_PI * min_frequency_ * dt);
+    low_pass_ = 1.0 - std::exp(-2.0 * M_PI * kBandTop * dt);
+    averaging_ = 1.0 - std::exp(-dt / kAveraging);
+    // White noise through the low-passes: two one-poles of coefficient c = 1 - b pass
+    // c^4 (1 + b^2) / (1 - b^2)^3 of its variance.
+    const double b = 1.0 - low_pass_;
+    noise_gain_ = std::pow(low_pass_, 4) * (1.0 + b * b) / std::pow(1.0 - b * b, 3);
+  }
   Coefficients c;
-  c.slow = std::max(1.0 - std::exp(-2.0 * M_PI * min_frequency_ * dt), 1.0 / n);
-  c.low_pass = 1.0 - std::exp(-2.0 * M_PI * kBandTop * dt);
-  c.averaging = std::max(1.0 - std::exp(-dt / kAveraging), 1.0 / n);
+  c.slow = std::max(slow_, 1.0 / n);
+  c.low_pass = low_pass_;
+  c.averaging = std::max(averaging_, 1.0 / n);
   const double measured_power = measured_.step(measured, c);
   const double output_power = output_.step(acceleration, c);
-  // White noise through the low-passes: two one-poles of coefficient c = 1 - b pass
-  // c^4 (1 + b^2) / (1 - b^2)^3 of its variance.
-  const double b = 1.0 - c.low_pass;
-  const double noise_power =
-      std::max(0.0, noise_variance) * std::pow(c.low_pass, 4) * (1.0 + b * b) / std::pow(1.0 - b * b, 3);
+  const double noise_power = std::max(0.0, noise_variance) * noise_gain_;
   const double allowed = kExcess * (measured_power + noise_power);
   elapsed_ += dt;
   if (elapsed_ >= kSettle)

@@ -80,7 +80,9 @@ private:
   Band measured_, output_;
   double previous_velocity_ = 0.0;
   double samples_ = 0.0;
-  double elapsed_ = 0.0;  ///< data judged so far [s]
+  double elapsed_ = 0.0;          ///< data judged so far [s]
+  double coefficients_dt_ = 0.0;  ///< the step the coefficients below are for [s]
+  double slow_ = 0.0, low_pass_ = 0.0, averaging_ = 0.0, noise_gain_ = 0.0;
   double weight_ = 1.0;
 };
 
