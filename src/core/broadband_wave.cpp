@@ -55,7 +55,8 @@ BroadbandWaveOutput BroadbandWave::update(const BroadbandWaveInput& in)
   const double density = noiseDensitySquared(in.rate);
   if (in.turning && vertical_)
     spectral_.restartRecord();
-  const WienerHeaveOutput spectral = spectral_.update(in.offset_free, dt, density);
+  const WienerHeaveOutput spectral =
+      spectral_.update(in.offset_free, in.rate_settled && in.rate > 0.0 ? 1.0 / in.rate : 0.0, density);
   if (dt > 0.0)
     spectral_share_ +=
         (1.0 - std::exp(-dt / WienerHeave::kDesignFade)) * ((spectral.valid ? 1.0 : 0.0) - spectral_share_);

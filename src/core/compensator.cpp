@@ -753,6 +753,7 @@ private:
     in.turning = turns_.turned();
     in.dt = dt;
     in.rate = rate_;
+    in.rate_settled = time_.settled();
     const BroadbandWaveOutput out = axis.broadband.update(in);
     *wave_a += out.weight * (out.estimate.acceleration - *wave_a);
     *wave_x += out.weight * (out.estimate.position - *wave_x);

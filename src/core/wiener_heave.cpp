@@ -66,9 +66,6 @@ void WienerHeave::setMinFrequency(double min_frequency)
 void WienerHeave::reset()
 {
   dt_ = sized_dt_ = 0.0;
-  steps_sum_ = 0.0;
-  steps_ = 0;
-  start_steps_.clear();
   decimation_ = 0;
   first_.clear();
   second_.clear();
@@ -93,45 +90,25 @@ void WienerHeave::restartRecord()
   stale_ = current_ != nullptr;
 }
 
-void WienerHeave::addStep(double dt)
-{
-  // A lost sample's double step, or a glitch, is no period; a step jittered by up to three
-  // quarters of one either way is (its neighbour makes up for it).
-  if (!(dt > 0.25 * sized_dt_ && dt < 1.75 * sized_dt_))
-    return;
-  steps_sum_ += dt;
-  dt_ = steps_sum_ / static_cast<double>(++steps_);
-}
-
-WienerHeaveOutput WienerHeave::update(double a, double dt, double noise_density_squared)
+WienerHeaveOutput WienerHeave::update(double a, double period, double noise_density_squared)
 {
   WienerHeaveOutput out;
-  if (!std::isfinite(a))
+  // Periods outside kMinPeriod..kMaxPeriod (not known yet, a glitch, not an IMU) would size the
+  // buffers absurdly: never taken.
+  if (!std::isfinite(a) || !(period >= kMinPeriod && period <= kMaxPeriod))
     return out;
+  if (decimation_ > 0 && std::abs(period - sized_dt_) > kPeriodChange * sized_dt_)
+    reset();  // a new rate: the buffers and the design are the old one's
+  dt_ = period;
   if (decimation_ == 0)
   {
-    // The first sample's dt is unknown: wait for kStartSteps steps, whose median sizes the
-    // buffers (one step is a driver's jitter, up to half a period either way). Periods outside
-    // kMinPeriod..kMaxPeriod (a glitch, not an IMU) would size them absurdly: never taken.
-    if (!(dt >= kMinPeriod && dt <= kMaxPeriod))
-      return out;
-    start_steps_.push_back(dt);
-    if (start_steps_.size() < static_cast<size_t>(kStartSteps))
-      return out;
-    std::vector<double> sorted = start_steps_;
-    std::nth_element(sorted.begin(), sorted.begin() + kStartSteps / 2, sorted.end());
-    dt_ = sized_dt_ = sorted[kStartSteps / 2];
+    sized_dt_ = period;
     decimation_ = std::max(1, static_cast<int>(std::lround(kDesignPeriod / dt_)));
-    for (double step : start_steps_)
-      addStep(step);
-    start_steps_.clear();
     first_.assign(decimation_, 0.0);
     second_.assign(decimation_, 0.0);
     ring_length_ = static_cast<int>(std::ceil(kMaxSpan / (decimation_ * dt_)));
     history_.assign(static_cast<size_t>(ring_length_) * decimation_, 0.0);
   }
-  else
-    addStep(dt);
   // Two moving averages (running sums over circular buffers of decimation_ values).
   const int slot = static_cast<int>(samples_ % decimation_);
   first_sum_ += a - first_[slot];

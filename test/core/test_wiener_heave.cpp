@@ -62,10 +62,8 @@ struct Errors
 };
 
 /// Runs `duration` s at `rate` with white noise of density 0.004 m/s^2/sqrt(Hz), a constant bias
-/// and a bias random walk; errors counted from `settle` s on. The steps given are the period but
-/// the first few, which are `first_steps` times it (stamps jittered while a driver starts).
-Errors run(const Sea* sea, double rate, double duration, double random_walk, double settle, unsigned seed,
-           const std::vector<double>& first_steps = {})
+/// and a bias random walk; errors counted from `settle` s on.
+Errors run(const Sea* sea, double rate, double duration, double random_walk, double settle, unsigned seed)
 {
   std::mt19937_64 rng(seed);
   std::normal_distribution<double> normal(0.0, 1.0);
@@ -82,8 +80,7 @@ Errors run(const Sea* sea, double rate, double duration, double random_walk, dou
       sea->at(t, &x, &v, &a);
     walk += random_walk * std::sqrt(1.0 / rate) * normal(rng);
     const double measured = a + 0.05 + walk + sigma * normal(rng);
-    const double step = (static_cast<size_t>(i) < first_steps.size() ? first_steps[i] : 1.0) / rate;
-    const WienerHeaveOutput out = heave.update(measured, step, density * density);
+    const WienerHeaveOutput out = heave.update(measured, 1.0 / rate, density * density);
     const double fixed_position = fixed.update(measured, 1.0 / rate).position;
     if (!out.valid)
       continue;
@@ -149,15 +146,6 @@ TEST(WienerHeave, AnyInputRate)
     EXPECT_GT(e.valid, 0) << rate;
     EXPECT_LT(e.position, 0.15) << rate << " Hz";
   }
-  // Sized from the median of the first kStartSteps steps: one stamped half a period late moves
-  // nothing.
-  WienerHeave heave;
-  heave.update(0.0, 1.5 / 87.7, 1e-5);
-  for (int i = 1; i < WienerHeave::kStartSteps - 1; ++i)
-    heave.update(0.0, 1.0 / 87.7, 1e-5);
-  EXPECT_EQ(heave.decimation(), 0);
-  heave.update(0.0, 1.0 / 87.7, 1e-5);
-  EXPECT_EQ(heave.decimation(), 44);
 }
 
 // A swell of 20 s: the FIR spans six peak periods (120 s at most), but never more than the input
@@ -185,20 +173,32 @@ TEST(WienerHeave, FirstDesignsReadOnlyTheInputHeld)
   EXPECT_NEAR(heave.span(), std::min(WienerHeave::kMaxSpan, WienerHeave::kSpanPeriods / heave.peakFrequency()), 1.0);
 }
 
-// Stamps jittered by up to a quarter period while the driver starts (steps of 0.5-1.5 periods):
-// the period is the mean of the steps, so the design is that of exact stamps.
-TEST(WienerHeave, JitteredFirstStepsChangeNothing)
+// The owner's period refined by a little (its time base's line fit) changes nothing; a new rate
+// starts the record over, sized for it.
+TEST(WienerHeave, ANewRateStartsOver)
 {
   const Sea wind(1.0 / 8.0, 1.8, 5);
-  const double rate = 50.0;
-  const Errors exact = run(&wind, rate, 400.0, 0.0, 200.0, 11);
-  for (const std::vector<double>& steps :
-       { std::vector<double>{ 1.5, 0.5, 1.5, 0.5 }, std::vector<double>{ 0.5, 1.5, 0.5, 1.5, 0.5, 1.5 } })
+  WienerHeave heave(0.03);
+  double x, v, a;
+  long i = 0;
+  for (; i < 60 * 50; ++i)
   {
-    const Errors jittered = run(&wind, rate, 400.0, 0.0, 200.0, 11, steps);
-    EXPECT_NEAR(jittered.position, exact.position, 0.05 * exact.position);
-    EXPECT_NEAR(jittered.velocity, exact.velocity, 0.05 * exact.velocity);
+    wind.at(i / 50.0, &x, &v, &a);
+    heave.update(a, (i % 2 ? 1.004 : 0.996) / 50.0, 1e-5);
   }
+  EXPECT_EQ(heave.decimation(), 25);
+  ASSERT_TRUE(heave.designed());
+  const double peak = heave.peakFrequency();
+  wind.at(i / 50.0, &x, &v, &a);
+  EXPECT_TRUE(heave.update(a, 1.05 / 50.0, 1e-5).valid);  // within kPeriodChange
+  EXPECT_EQ(heave.decimation(), 25);
+  EXPECT_EQ(heave.peakFrequency(), peak);
+  EXPECT_FALSE(heave.update(a, 1.0 / 100.0, 1e-5).valid);  // 100 Hz: a new record
+  EXPECT_EQ(heave.decimation(), 50);
+  EXPECT_FALSE(heave.designed());
+  // Unknown (0) or absurd periods are not taken and change nothing.
+  EXPECT_FALSE(heave.update(a, 0.0, 1e-5).valid);
+  EXPECT_EQ(heave.decimation(), 50);
 }
 
 // No sea, a bias that wanders (random walk and a 60 s drift of 0.06 m/s^2): no heave.
@@ -240,9 +240,8 @@ TEST(WienerHeave, FirstDesignResetAndCopy)
     if (heave.update(a, 1.0 / rate, 1e-5).valid && first_valid < 0.0)
       first_valid = i / rate;
   }
-  // kFirstDesign of data after the steps that size the buffers and the low-pass's two averages
-  EXPECT_NEAR(first_valid, WienerHeave::kFirstDesign + WienerHeave::kStartSteps / rate + 2 * WienerHeave::kDesignPeriod,
-              1.0);
+  // kFirstDesign of data after the low-pass's two averages have filled
+  EXPECT_NEAR(first_valid, WienerHeave::kFirstDesign + 2 * WienerHeave::kDesignPeriod, 1.0);
   EXPECT_GT(heave.peakFrequency(), 0.6 / 8.0);
   EXPECT_LT(heave.peakFrequency(), 1.4 / 8.0);
   WienerHeave copy = heave;

@@ -63,6 +63,9 @@ struct BroadbandWaveInput
   bool turning = false;            ///< the heading has moved: the sea as met changed, its spectrum is measured anew
   double dt = 0.0;                 ///< [s] since the previous sample (0: the first)
   double rate = 0.0;               ///< sample rate [Hz] (0: not known yet)
+  /// The rate rests on enough of the stream to size the spectral estimate's buffers by (the
+  /// owner's time base has settled); until then the spectral estimate takes no sample.
+  bool rate_settled = true;
 };
 
 struct BroadbandWaveOutput

@@ -69,7 +69,9 @@ public:
   static constexpr double kDesignFade = 2.0;             ///< [s]
   static constexpr double kMinPeriod = 1e-4;             ///< shortest sample period taken (10 kHz) [s]
   static constexpr double kMaxPeriod = 10.0;             ///< longest [s]
-  static constexpr int kStartSteps = 32;                 ///< steps that size the buffers
+  /// Relative change of the sample period that starts the record over (the buffers and the
+  /// design are the old rate's) [-].
+  static constexpr double kPeriodChange = 0.1;
 
   /// min_frequency [Hz]: the lowest wave frequency; below it nothing is heave.
   explicit WienerHeave(double min_frequency = 0.04);
@@ -82,11 +84,13 @@ public:
   void restartRecord();
   void setMinFrequency(double min_frequency);
 
-  /// Takes the vertical acceleration a [m/s^2] (gravity removed), the step dt [s] since the
-  /// previous sample (the rate constant over a record: a change of rate needs reset()) and the
-  /// white-noise density of the acceleration squared, one-sided [(m/s^2)^2/Hz], used at the next
-  /// design.
-  WienerHeaveOutput update(double a, double dt, double noise_density_squared);
+  /// Takes the vertical acceleration a [m/s^2] (gravity removed), the sample period [s] as the
+  /// owner's time base has it (samples are taken one period apart: stamp jitter and a dropped
+  /// sample are the time base's concern; 0 while it does not know the rate, and any period
+  /// outside kMinPeriod..kMaxPeriod: the sample is not taken; one more than kPeriodChange from the
+  /// period the record began with starts it over) and the white-noise density of the
+  /// acceleration squared, one-sided [(m/s^2)^2/Hz], used at the next design.
+  WienerHeaveOutput update(double a, double period, double noise_density_squared);
 
   /// A design has been made since the last reset() (it may be stale after restartRecord()).
   bool designed() const
@@ -135,17 +139,10 @@ private:
   Statistics statistics(int segment, double mean, double noise_density_squared) const;
   void design(double noise_density_squared);
   void apply(const Design& d, double* x, double* v) const;
-  /// Takes a step into dt_'s mean unless it is no period (outside 0.25..1.75 sized_dt_).
-  void addStep(double dt);
 
   double min_frequency_;
-  /// The sample period: the mean of the steps since reset() [s] (a step stamped early or late, as
-  /// a driver's jitter makes it before the owner knows the rate, moves it by its share only).
-  double dt_ = 0.0;
-  double sized_dt_ = 0.0;            ///< the median of the first kStartSteps steps [s]
-  double steps_sum_ = 0.0;           ///< of the steps in dt_'s mean [s]
-  long steps_ = 0;                   ///< in it
-  std::vector<double> start_steps_;  ///< the first kStartSteps steps, before anything is sized
+  double dt_ = 0.0;        ///< the sample period, the owner's latest [s]
+  double sized_dt_ = 0.0;  ///< the period the record began with, which sized the buffers [s]
   int decimation_ = 0;
   // Two moving averages of decimation_ samples.
   std::vector<double> first_, second_;
