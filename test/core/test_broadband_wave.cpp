@@ -45,6 +45,21 @@ struct BroadSea
 
 constexpr double kRate = 20.0;
 
+/// Sample i of an acceleration a [m/s^2] as measured (white noise of 0.004 m/s^2/sqrt(Hz), no
+/// calibrated offset), with a lock whose model explains none of it; the caller sets what the
+/// harmonic model does otherwise.
+BroadbandWaveInput measured(long i, double a, std::mt19937_64* rng)
+{
+  BroadbandWaveInput in;
+  in.raw = a + std::normal_distribution<double>(0.0, 0.004 * std::sqrt(kRate / 2.0))(*rng);
+  in.offset_free = in.raw;
+  in.residual = in.raw;
+  in.locked = true;
+  in.dt = i > 0 ? 1.0 / kRate : 0.0;
+  in.rate = kRate;
+  return in;
+}
+
 /// Feeds `seconds` of the sea (or none) with white noise 0.004 m/s^2/sqrt(Hz); the harmonic model,
 /// when `locked`, explains nothing of a broad sea (its residual is the whole acceleration).
 /// Returns the last output; the largest weight and largest blended displacement (weight times
@@ -53,7 +68,6 @@ BroadbandWaveOutput feed(BroadbandWave* wave, const BroadSea* sea, double second
                          std::mt19937_64* rng, double* largest_weight = nullptr, bool locked = true,
                          double* largest_blended = nullptr)
 {
-  std::normal_distribution<double> normal(0.0, 0.004 * std::sqrt(kRate / 2.0));
   BroadbandWaveOutput out;
   const double end = *t + seconds;
   for (; *t < end; *t += 1.0 / kRate)
@@ -61,14 +75,11 @@ BroadbandWaveOutput feed(BroadbandWave* wave, const BroadSea* sea, double second
     double x = 0.0, a = 0.0;
     if (sea)
       sea->at(*t, &x, &a);
-    BroadbandWaveInput in;
-    in.raw = a + 0.02 + normal(*rng);
-    in.offset_free = in.raw - 0.02;
+    BroadbandWaveInput in = measured(*t > 0.0 ? 1 : 0, a, rng);
+    in.raw += 0.02;  // a calibrated offset
     in.residual = in.raw;
     in.locked = locked;
     in.allowed = allowed;
-    in.dt = *t > 0.0 ? 1.0 / kRate : 0.0;
-    in.rate = kRate;
     out = wave->update(in);
     if (largest_weight)
       *largest_weight = std::max(*largest_weight, out.weight);
@@ -166,7 +177,6 @@ TEST(BroadbandWave, TurnHandsTheVerticalToTheFixedFilterAndBack)
   BroadbandWave wave(true);
   HeaveFilter fixed;  // the same corner as BroadbandWave's own
   std::mt19937_64 rng(4);
-  std::normal_distribution<double> normal(0.0, 0.004 * std::sqrt(kRate / 2.0));
   const double dt = 1.0 / kRate, turn_start = 400.0, turn_end = 430.0;
   double previous = 0.0, largest_step_before = 0.0, largest_step_turn = 0.0;
   double fixed_gap_turn = 0.0, fixed_gap_after = 0.0, error2 = 0.0, fixed_error2 = 0.0, truth2 = 0.0;
@@ -175,14 +185,8 @@ TEST(BroadbandWave, TurnHandsTheVerticalToTheFixedFilterAndBack)
     const double t = i * dt;
     double x, a;
     sea.at(t, &x, &a);
-    BroadbandWaveInput in;
-    in.raw = a + normal(rng);
-    in.offset_free = in.raw;
-    in.residual = in.raw;
-    in.locked = true;
+    BroadbandWaveInput in = measured(i, a, &rng);
     in.turning = t >= turn_start && t < turn_end;
-    in.dt = i > 0 ? dt : 0.0;
-    in.rate = kRate;
     const double position = wave.update(in).estimate.position;
     const double fixed_position = fixed.update(in.offset_free, in.dt).position;
     const double step = std::abs(position - previous);
@@ -218,21 +222,15 @@ TEST(BroadbandWave, ALockOffThePeakGivesWayOnceTheDesignHoldsTheSea)
   const BroadSea sea(0.5, 6);
   BroadbandWave wave(true);
   std::mt19937_64 rng(6);
-  std::normal_distribution<double> normal(0.0, 0.004 * std::sqrt(kRate / 2.0));
   double smallest_weight = 1.0;
   for (long i = 0; i < static_cast<long>((WienerHeave::kFirstDesign + 40.0) * kRate); ++i)
   {
     const double t = i / kRate;
     double x = 0.0, a = 0.0;
     sea.at(t, &x, &a);
-    BroadbandWaveInput in;
-    in.raw = a + normal(rng);
-    in.offset_free = in.raw;
+    BroadbandWaveInput in = measured(i, a, &rng);
     in.residual = 0.0;
-    in.locked = true;
     in.frequency = 0.6;
-    in.dt = i > 0 ? 1.0 / kRate : 0.0;
-    in.rate = kRate;
     const BroadbandWaveOutput out = wave.update(in);
     if (t > WienerHeave::kFirstDesign + 20.0)
       smallest_weight = std::min(smallest_weight, out.weight);
@@ -248,7 +246,6 @@ TEST(BroadbandWave, ModelLockedElsewhereGivesWayToTheBroadbandEstimate)
 {
   std::mt19937_64 rng(5);
   std::uniform_real_distribution<double> u(0.0, 1.0);
-  std::normal_distribution<double> normal(0.0, 0.004 * std::sqrt(kRate / 2.0));
   std::vector<double> frequency, phase;
   for (int k = 0; k < 20; ++k)
   {
@@ -269,15 +266,10 @@ TEST(BroadbandWave, ModelLockedElsewhereGivesWayToTheBroadbandEstimate)
       x += s;
       a -= w * w * s;
     }
-    BroadbandWaveInput in;
-    in.raw = a + normal(rng);
-    in.offset_free = in.raw;
+    BroadbandWaveInput in = measured(i, a, &rng);
     in.residual = 0.2 * a;
     in.harmonic_position = -0.8 * a / (locked * locked);
-    in.locked = true;
     in.frequency = locked / (2.0 * M_PI);
-    in.dt = i > 0 ? dt : 0.0;
-    in.rate = kRate;
     const BroadbandWaveOutput out = wave.update(in);
     if (t < 300.0)
       continue;
@@ -302,22 +294,16 @@ TEST(BroadbandWave, ModelLockedElsewhereGivesWayToTheBroadbandEstimate)
 TEST(BroadbandWave, ALockOnTheDisplacementPeakIsNotOverruled)
 {
   std::mt19937_64 rng(6);
-  std::normal_distribution<double> normal(0.0, 0.004 * std::sqrt(kRate / 2.0));
   const double w = 2.0 * M_PI * 0.1, dt = 1.0 / kRate;
   BroadbandWave wave(false);
   double largest_weight = 0.0;
   for (long i = 0; i < static_cast<long>(900 * kRate); ++i)
   {
     const double t = i * dt, x = 0.3 * std::sin(w * t), a = -w * w * x;
-    BroadbandWaveInput in;
-    in.raw = a + normal(rng);
-    in.offset_free = in.raw;
+    BroadbandWaveInput in = measured(i, a, &rng);
     in.residual = in.raw - 0.98 * a;
     in.harmonic_position = 0.98 * x;
-    in.locked = true;
     in.frequency = 0.1;
-    in.dt = i > 0 ? dt : 0.0;
-    in.rate = kRate;
     const BroadbandWaveOutput out = wave.update(in);
     if (t >= 300.0)
       largest_weight = std::max(largest_weight, out.weight);
