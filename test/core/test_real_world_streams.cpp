@@ -264,7 +264,7 @@ TEST(RealWorldStreams, MotionThatStopsLeavesNoWave)
   // Half a minute of a 1.3 Hz oscillation of 5 cm (a hand-driven rig), then rest: the spectral
   // estimate designed on it is a FIR of 20 s and the harmonic model has a memory of several
   // periods; both go on describing the oscillation after it has stopped unless the wave output is
-  // held to what the acceleration shows (without that, x and y show nearly twice the bound).
+  // held to what the acceleration shows (without that, every axis exceeds the bound, z threefold).
   for (int axis = 0; axis < 3; ++axis)
   {
     std::mt19937_64 rng(4000 + axis);
