@@ -4,8 +4,9 @@
 // periods, and the spectral heave filter is a FIR over several peak periods, which for a narrow
 // spectrum behaves like an oscillator. When the motion stops (a hand-held lift put down, a sensor
 // laid on a table after a swing), both go on describing a wave that is gone, for as long as their
-// memory or span, and a sensor at rest shows centimetres to metres of wave motion. At sea this
-// never matters: the wave the models describe is the one being measured.
+// memory or span, and a sensor at rest shows centimetres to metres of wave motion. At sea the wave
+// the models describe is the one being measured; the check acts there only where the output's
+// acceleration is rougher than the measured one (the first designs of a spectral record).
 //
 // WaveConsistency compares the acceleration of the wave output (the difference of its velocity
 // over a step) with the measured acceleration, both in the same band (less their mean over
