@@ -171,6 +171,9 @@ public:
       throw std::invalid_argument("invalid compensator configuration: " + why);
     // Starts the planning thread here, not in the call of the sample that first gives the rate.
     planInBackground([] {});
+    // The wave stages as configured (per axis: vertical or not, the wave band) from the first
+    // sample on, calibration window or not (a bias from a file skips it).
+    resetMotion();
   }
 
   bool setConfig(const CompensatorConfig& config, std::string* why)

@@ -237,3 +237,39 @@ TEST(Compensator, PaperGainLimits)
   EXPECT_FALSE(config.validate(&why));
   EXPECT_NE(why.find("beta_v_z"), std::string::npos) << why;
 }
+
+TEST(Compensator, TheConfiguredWaveBandHoldsWithoutACalibrationWindow)
+{
+  // A bias from a calibration file and the IMU's own orientation: no calibration window, whose end
+  // would set up the wave stages again. They must take the configuration from the first sample
+  // on: with min_frequency 0.2 Hz a 0.1 Hz heave of 1 m is no wave (nothing below
+  // min_frequency is), as it is not after a calibration window.
+  CompensatorConfig config = modeConfig(Mode::kDefault);
+  config.min_frequency = 0.2;
+  const Vector3 bias(0.02, -0.01, 0.03);
+  const double rate = 50.0, w = 2.0 * M_PI * 0.1;
+  for (bool from_file : { true, false })
+  {
+    Compensator c(config);
+    if (from_file)
+      ASSERT_TRUE(c.setConstantBias(bias));
+    double wave2 = 0.0, truth2 = 0.0;
+    for (int k = 0; k < static_cast<int>(300 * rate); ++k)
+    {
+      const double t = k / rate;
+      const double heave = t < 30.0 && !from_file ? 0.0 : std::sin(w * t);  // still while calibrating
+      pbc::ImuSample s;
+      s.t = 100.0 + t;
+      s.specific_force = Vector3(0.0, 0.0, pbc::kStandardGravity - w * w * heave) + bias;
+      s.has_orientation = true;
+      CompensatorOutput out;
+      c.addSample(s, &out);
+      if (t >= 120.0)
+      {
+        wave2 += out.position_wave.z() * out.position_wave.z();
+        truth2 += heave * heave;
+      }
+    }
+    EXPECT_LT(std::sqrt(wave2 / truth2), 0.1) << (from_file ? "bias from a file" : "after a calibration window");
+  }
+}
