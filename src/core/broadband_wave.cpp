@@ -151,13 +151,14 @@ BroadbandWaveOutput BroadbandWave::update(const BroadbandWaveInput& in)
   // mean square since the start lags a design).
   const double peak = spectral_.peakFrequency();
   const bool holds_sea = spectral.valid && spectral.wave_variance > kSeaOverError * spectral.error_variance;
-  const bool output_holds_sea = target >= kMinWeight && wave_variance_ > kSeaOverError * broadband;
+  const bool output_over_error = wave_variance_ > kSeaOverError * broadband;
+  const bool output_holds_sea = target >= kMinWeight && output_over_error;
   if ((holds_sea || output_holds_sea) && spectral.valid && in.locked && in.frequency > 0.0 && peak > 0.0 &&
       std::abs(in.frequency - peak) > kOffPeak * peak)
     target = 1.0;
   // Without a lock the harmonic model's output is none: a design that holds a sea, with an output
   // kSeaOverError times the broadband error, is then the whole output.
-  if (!in.locked && holds_sea && wave_variance_ > kSeaOverError * broadband)
+  if (!in.locked && holds_sea && output_over_error)
     target = 1.0;
   // What the harmonic model's displacement misses: with a lock, what the residual or the difference
   // says; without one its output is none, so the whole wave. Velocity in proportion, at the

@@ -815,8 +815,7 @@ private:
       broadband = broadbandWave(axis, i, raw, residual, dt, &wave_a, &wave_x, &wave_v);
       // No more wave than the measured acceleration shows (a model describing a motion that has
       // stopped fades out); the slow channel then takes the measured acceleration itself.
-      const double noise = axis.broadband.noiseDensitySquared(rate_) * 0.5 * rate_;
-      const double consistent = axis.consistency.update(offsetFree(raw, i), wave_v, noise, dt);
+      const double consistent = axis.consistency.update(offsetFree(raw, i), wave_v, axis.broadband.noiseVariance(), dt);
       wave_a *= consistent;
       wave_x *= consistent;
       wave_v *= consistent;

@@ -122,8 +122,12 @@ public:
   /// (lines above the wave band, an engine's vibration, inflate the first differences).
   double noiseDensitySquared(double rate) const
   {
-    const double variance = noise_blocks_ > 0.0 ? std::min(noise_variance_, line_free_variance_) : noise_variance_;
-    return 2.0 * variance * (rate > 0.0 ? 1.0 / rate : 0.0);
+    return 2.0 * noiseVariance() * (rate > 0.0 ? 1.0 / rate : 0.0);
+  }
+  /// The same as a variance per sample [(m/s^2)^2].
+  double noiseVariance() const
+  {
+    return noise_blocks_ > 0.0 ? std::min(noise_variance_, line_free_variance_) : noise_variance_;
   }
 
 private:
