@@ -27,6 +27,7 @@ void BroadbandWave::reset()
   for (HeaveFilter& filter : residual_heave_)
     filter.reset();
   residual_high_ = {};
+  residual_leaky_ = {};
   residual_band_variance_ = {};
   difference_variance_ = 0.0;
   residual_samples_ = 0.0;
@@ -113,6 +114,16 @@ BroadbandWaveOutput BroadbandWave::update(const BroadbandWaveInput& in)
       };
       const double two = high_pass(&residual_high_[1], high_pass(&residual_high_[0], in.residual));
       measure_missed(kTwoPasses, two);
+      // Two high-passes and a double integration without drift removal: two leaky integrators,
+      // 1 / (s + omega_h)^2 (the vertical axis only).
+      if (vertical_)
+      {
+        const double leak = (1.0 - high) / (2.0 * M_PI * min_frequency_);
+        residual_leaky_[0] = high * residual_leaky_[0] + leak * in.residual;
+        residual_leaky_[1] = high * residual_leaky_[1] + leak * residual_leaky_[0];
+        residual_band_variance_[kTwoPassesLeaky] +=
+            average_missed * (residual_leaky_[1] * residual_leaky_[1] - residual_band_variance_[kTwoPassesLeaky]);
+      }
       if (four_passes)
         measure_missed(kFourPasses, high_pass(&residual_high_[3], high_pass(&residual_high_[2], two)));
       const double difference = in.harmonic_position - out.estimate.position;
@@ -133,7 +144,27 @@ BroadbandWaveOutput BroadbandWave::update(const BroadbandWaveInput& in)
   // 1 / (8 omega_h^3) for two, 1 / (64 omega_h^3) for four.
   const double omega_h = 2.0 * M_PI * min_frequency_;
   const double noise = noiseDensitySquared(in.rate) / ((four_passes ? 64.0 : 8.0) * omega_h * omega_h * omega_h);
-  const double missed = std::max(0.0, residual_band_variance_[four_passes ? kFourPasses : kTwoPasses] - noise);
+  // On the vertical axis, whose share may open from the first lock on, through two high-passes
+  // the miss is measured both ways and the smaller counts: the fixed filter's drift removal rings
+  // for a minute after the lock's first samples (on a 60 s bench, 2 to 14 times the noise), the
+  // leaky integrators pass the slow content it removes (a tilt leaking into one level frame). And
+  // a mean square of the noise alone over T seconds scatters by 1 / sqrt(B T) of it, B the
+  // noise-equivalent bandwidth of the chain (omega_h / 5 for two high-passes, 2 omega_h / 5 for
+  // four; T at most twice kAveraging once the mean moves): a miss counts only beyond
+  // kMissSignificance such scatters. On a narrow sea the broadband error is small, and any excess
+  // would otherwise open the share. A horizontal share waits TurnDetector::kAfterStart, past both.
+  double measured_missed = residual_band_variance_[four_passes ? kFourPasses : kTwoPasses];
+  double significant = noise;
+  if (vertical_)
+  {
+    if (!four_passes)
+      measured_missed = std::min(measured_missed, residual_band_variance_[kTwoPassesLeaky]);
+    const double averaged = in.rate > 0.0 ? std::min(residual_samples_ / in.rate, 2.0 * kAveraging) : 0.0;
+    const double bandwidth = (four_passes ? 2.0 : 1.0) * omega_h / 5.0;
+    if (averaged > 0.0)
+      significant *= 1.0 + kMissSignificance / std::sqrt(bandwidth * averaged);
+  }
+  const double missed = std::max(0.0, measured_missed - significant);
   const double broadband = out.position_variance + std::max(low_variance_, low_.back() * low_.back());
   double target = missed > 0.0 ? missed / (missed + broadband) : 0.0;
   // The residual sees only the wave band: bias wander below it never opens the share. But a model

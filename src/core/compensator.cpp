@@ -722,6 +722,11 @@ private:
     if (jump && axis.locked && !axis.tracker->full() &&
         axis.tracker->samples() < kResolvePeriods * rate_ / axis.frequency)
       return;
+    // A new horizontal lock is fitted to the last period of input: within a period of a turn that
+    // holds the turn's centripetal acceleration, which the model would then describe as a wave.
+    if (jump && config_.mode == Mode::kDefault && &axis != &axes_[2] &&
+        turns_.sinceYaw() < std::max(1.0 / estimate.frequency, config_.harmonic_memory))
+      return;
     axis.locked = true;
     axis.frequency = estimate.frequency;
     if (jump)

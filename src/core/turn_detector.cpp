@@ -58,7 +58,9 @@ void TurnDetector::followYawRate(double yaw_rate, double dt)
   yaw_samples_ += 1.0;
   yaw_spread_ += std::max(weight(kYawSpreadAveraging), 1.0 / yaw_samples_) * (deviation * deviation - yaw_spread_);
   const double threshold = std::max(kTurnRate, kYawSpreads * std::sqrt(yaw_spread_));
-  since_turn_ = std::abs(turn_rate_) > threshold || turned_ ? 0.0 : since_turn_ + dt;
+  const bool yawing = std::abs(turn_rate_) > threshold || turned_;
+  since_turn_ = yawing ? 0.0 : since_turn_ + dt;
+  since_yaw_ = yawing ? 0.0 : since_yaw_ + dt;
   since_start_ += dt;
   if (turned_)
     turn_confirmed_ = true;

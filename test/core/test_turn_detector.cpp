@@ -129,4 +129,24 @@ TEST(TurnDetector, ResetStartsTheHoldAgain)
   EXPECT_EQ(run.turns, 0);
   EXPECT_NEAR(run.first_allowed, TurnDetector::kAfterStart, 1.0);
 }
+// sinceYaw() counts from the last sample beyond the turn rate, with or without a measured
+// attitude: large before any yaw, zero while the ship turns, then the time since the turn ended
+// (the 2 s mean rate falls below kTurnRate within a few seconds of it).
+TEST(TurnDetector, SinceYawCountsFromTheLastYaw)
+{
+  for (const bool attitude_measured : { true, false })
+  {
+    TurnDetector detector;
+    const double start = 200.0, rate = 0.03, length = 0.5 * M_PI / rate;
+    const auto heading = [&](double t) { return rate * std::clamp(t - start, 0.0, length); };
+    feed(&detector, start, heading, attitude_measured);
+    EXPECT_GT(detector.sinceYaw(), start - 1.0);
+    feed(&detector, 10.0, heading, attitude_measured, start);
+    EXPECT_EQ(detector.sinceYaw(), 0.0);
+    feed(&detector, length - 10.0 + 30.0, heading, attitude_measured, start + 10.0);
+    EXPECT_GT(detector.sinceYaw(), 30.0 - 4.0 * TurnDetector::kTurnAveraging);
+    EXPECT_LT(detector.sinceYaw(), 30.0);
+  }
+}
+
 }  // namespace periodic_bias_compensation

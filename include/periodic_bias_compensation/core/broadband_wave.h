@@ -11,7 +11,11 @@
 //    model; on the vertical axis four until the first spectral design, while the fixed filter
 //    stands in: it carries everything below the band, and a bias drifting over a minute leaks
 //    through two high-passes as centimetres said to be missed), integrated by a second
-//    HeaveFilter, its variance less that of the white noise through both; once that opens the
+//    HeaveFilter, its variance less that of the white noise through both (on the vertical axis,
+//    whose share may open from the first lock on: through two, the smaller of it and the variance
+//    through two leaky integrators, 1 / (s + omega_h)^2, the same band without the drift removal,
+//    which rings for a minute after the lock's first samples; less the noise by
+//    kMissSignificance times the scatter of its mean square); once that opens the
 //    share, the larger of it and what the difference of the two displacements says (its
 //    variance less the broadband error: a model locked elsewhere fits the acceleration yet
 //    gives the wrong displacement);
@@ -89,6 +93,8 @@ public:
   /// Smallest share; below it, none [-]: a few percent gain little and add that share of
   /// everything below the wave band, which can be metres of bias wander.
   static constexpr double kMinWeight = 0.1;
+  /// Scatters of the noise's mean square beyond which the harmonic model's residual is a miss [-].
+  static constexpr double kMissSignificance = 2.0;
   /// Time constant with which the share follows its target [s]: never a step.
   static constexpr double kWeightTime = 2.0;
   /// Time constant with which a horizontal share fades out when it is no longer allowed [s].
@@ -141,11 +147,13 @@ private:
   WienerHeave spectral_;
   /// The two ways the harmonic model's residual is measured above the band edge.
   static constexpr std::size_t kTwoPasses = 0;
-  static constexpr std::size_t kFourPasses = 1;  ///< the vertical axis until the first design only
+  static constexpr std::size_t kFourPasses = 1;      ///< the vertical axis until the first design only
+  static constexpr std::size_t kTwoPassesLeaky = 2;  ///< two passes, integrated without drift removal
   /// The high-passes of the residual: [0], [1] for both ways, [2], [3] for four passes.
   std::array<HighPass, 4> residual_high_{};
   std::array<HeaveFilter, 2> residual_heave_;  ///< the residual's displacement, each way
-  std::array<double, 2> residual_band_variance_{};
+  std::array<double, 2> residual_leaky_{};     ///< the leaky integrators' states (kTwoPassesLeaky)
+  std::array<double, 3> residual_band_variance_{};
   double difference_variance_ = 0.0;  ///< of harmonic less broadband displacement, since the lock
   double residual_samples_ = 0.0;     ///< in residual_band_variance_ since the lock
   double samples_ = 0.0;              ///< in noise_variance_ and low_variance_

@@ -66,6 +66,12 @@ public:
   {
     return turned_;
   }
+  /// Time since the yaw rate last marked a turn or the heading mean moved by kRecordTurn [s]
+  /// (with or without a measured attitude; large before any).
+  double sinceYaw() const
+  {
+    return since_yaw_;
+  }
   /// The horizontal axes may take a broadband wave share.
   bool horizontalShareAllowed() const
   {
@@ -83,6 +89,7 @@ private:
   bool turn_confirmed_ = false;       ///< the heading turned since the share was last allowed
   double since_start_ = 0.0;          ///< time since the first sample [s]
   double since_turn_ = 0.0;           ///< time since the last turn or yaw beyond the threshold [s]
+  double since_yaw_ = 1e9;            ///< the same, whether the attitude is measured or not [s]
   long heading_samples_ = 0;          ///< samples in the heading mean
   double heading_ = 0.0;              ///< last heading, unwrapped [rad]
   double heading_mean_ = 0.0;         ///< its moving mean over kHeadingAveraging [rad]
