@@ -501,6 +501,56 @@ gap::Recording readBuoy(const std::string& path)
   return r;
 }
 
+/// Band of a replayed recording kept as its motion [Hz]: a moored buoy's wave motion lies below
+/// 0.5 Hz; above 1 Hz the buoy's own sensor noise and vibration lie one to two decades above any
+/// sensor model (docs/gap.md, "Real recordings").
+constexpr double kReplayBand = 1.0;
+
+/// x low-passed without phase: a second-order Butterworth low-pass at `corner` [Hz] run forward
+/// and backward (fourth order in magnitude), each pass started in its steady state for its first
+/// value (no start transient).
+Eigen::VectorXd zeroPhaseLowPass(const Eigen::VectorXd& x, double rate, double corner)
+{
+  const double k = std::tan(M_PI * corner / rate), norm = 1.0 / (1.0 + std::sqrt(2.0) * k + k * k);
+  const double b0 = k * k * norm, b1 = 2.0 * b0, b2 = b0;
+  const double a1 = 2.0 * (k * k - 1.0) * norm, a2 = (1.0 - std::sqrt(2.0) * k + k * k) * norm;
+  const auto pass = [&](Eigen::VectorXd v) {
+    if (v.size() == 0)
+    {
+      return v;
+    }
+    double z1 = (1.0 - b0) * v[0], z2 = (b2 - a2) * v[0];
+    for (Eigen::Index i = 0; i < v.size(); ++i)
+    {
+      const double in = v[i], out = b0 * in + z1;
+      z1 = b1 * in - a1 * out + z2;
+      z2 = b2 * in - a2 * out;
+      v[i] = out;
+    }
+    return v;
+  };
+  const Eigen::VectorXd forward = pass(x);
+  return pass(forward.reverse()).reverse();
+}
+
+/// A real recording's motion, to be replayed as truth: on uniform stamps at its rate, its specific
+/// force and rate low-passed to kReplayBand without phase, its reported orientation as it is. What
+/// the real sensor added in the wave band (its bias, a standing tilt) stays: it is the motion's
+/// now, in every case and its null alike.
+gap::Recording recordedMotion(const gap::Recording& recording)
+{
+  gap::Recording motion = recording;
+  for (std::size_t i = 0; i < motion.size(); ++i)
+  {
+    motion.stamp[i] = recording.stamp.front() + static_cast<double>(i) / recording.rate;
+  }
+  for (Eigen::Index c = 0; c < motion.data.cols(); ++c)
+  {
+    motion.data.col(c) = zeroPhaseLowPass(recording.data.col(c), recording.rate, kReplayBand);
+  }
+  return motion;
+}
+
 /// The recorded motion replayed as truth under simulated sensor effects: each sample's specific
 /// force, rate and orientation go through the simulator's effects (their own random streams from
 /// `seed`) as if they were the ideal sensor's; the angular acceleration a lever arm needs is the
@@ -758,14 +808,15 @@ CaseResult runCase(const Case& c, const sim::Scenario& base, const gap::Recordin
   const auto recording = [&](const std::string& effect, double k) {
     if (replayed)
     {
-      std::vector<sim::EffectSpec> effects;
+      // The scenario's own sensor effects and the withheld one.
+      std::vector<sim::EffectSpec> effects = base.effects;
       if (effect == "saturation")
       {
         effects.push_back(saturationFor(*replayed, k));
       }
-      else if (effect != "none")
+      else
       {
-        effects = withheldEffect(effect, k, base);
+        effects = withheldScenario(base, effect, k).effects;
       }
       return replayRecording(*replayed, effects, c.seed);
     }
@@ -834,6 +885,7 @@ std::vector<CaseResult> runCases(const Options& opt, const Grid& grid)
         const double span = buoy->stamp.back() - buoy->stamp.front() + 1.0 / buoy->rate;
         buoy = gap::sliceFraction(*buoy, 0.0, opt.duration / span);
       }
+      buoy = recordedMotion(*buoy);
       base = gap::matchScenario(sim::loadScenario(opt.buoy_scenario), *buoy);
     }
     else
@@ -1118,8 +1170,9 @@ int main(int argc, char** argv)
       "Withholds each named effect from a simulated 'real' recording, diagnoses the gap against the\n"
       "scenario without it and scores the verdicts (docs/gap.md). --bench-hours H times one diagnosis\n"
       "of H hours of 100 Hz data instead. --buoy adds the motion 'buoy-replay': the moored buoy's\n"
-      "recording (../shared/data/buoy_morro_bay) under simulated effects, against YAML (all of it,\n"
-      "or its first S seconds when --duration S is given).\n");
+      "recorded motion (../shared/data/buoy_morro_bay, low-passed at 1 Hz) under YAML's sensor\n"
+      "effects and the withheld one, against YAML (all of it, or its first S seconds when\n"
+      "--duration S is given).\n");
   cli.flag("--small", &opt.small)
       .integer("--seeds", &opt.seeds)
       .number("--duration", &opt.duration, &opt.duration_given)

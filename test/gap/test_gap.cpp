@@ -377,7 +377,7 @@ TEST(GapValidate, ARealBuoysMotionUnderSimulatedEffectsGetsNoConfidentWrongVerdi
                                 data.string() + " --buoy-scenario " + PBC_SOURCE_DIR +
                                 "/config/scenarios/gap_buoy_morro_bay.yaml --json " + dir + "/buoy.json" + cases);
   // 0 or 3: whether the withheld effect is named on this motion is reported (docs/gap.md), not
-  // asserted; a confident verdict that names another effect, or none on the recording as it is,
+  // asserted; a confident verdict that names another effect, or any on the motion without one,
   // would be wrong.
   ASSERT_TRUE(r.status == 0 || r.status == 3) << r.output;
   const nlohmann::json json = nlohmann::json::parse(readAll(dir + "/buoy.json"));
