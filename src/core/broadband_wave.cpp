@@ -146,8 +146,8 @@ BroadbandWaveOutput BroadbandWave::update(const BroadbandWaveInput& in)
   const double noise = noiseDensitySquared(in.rate) / ((four_passes ? 64.0 : 8.0) * omega_h * omega_h * omega_h);
   // On the vertical axis, whose share may open from the first lock on, through two high-passes
   // the miss is measured both ways and the smaller counts: the fixed filter's drift removal rings
-  // for a minute after the lock's first samples (on a 60 s bench, 2 to 14 times the noise), the
-  // leaky integrators pass the slow content it removes (a tilt leaking into one level frame). And
+  // for a minute after the lock's first samples, the leaky integrators pass the slow content it
+  // removes (a tilt leaking into one level frame; figures: docs/benchmarks.md, "Heave blend"). And
   // a mean square of the noise alone over T seconds scatters by 1 / sqrt(B T) of it, B the
   // noise-equivalent bandwidth of the chain (omega_h / 5 for two high-passes, 2 omega_h / 5 for
   // four; T at most twice kAveraging once the mean moves): a miss counts only beyond

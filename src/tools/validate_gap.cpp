@@ -502,8 +502,8 @@ gap::Recording readBuoy(const std::string& path)
 }
 
 /// Band of a replayed recording kept as its motion [Hz]: a moored buoy's wave motion lies below
-/// 0.5 Hz; above 1 Hz the buoy's own sensor noise and vibration lie one to two decades above any
-/// sensor model (docs/gap.md, "Real recordings").
+/// 0.5 Hz; above 1 Hz its own sensor noise and vibration dominate (docs/gap.md, "Real
+/// recordings").
 constexpr double kReplayBand = 1.0;
 
 /// x low-passed without phase: a second-order Butterworth low-pass at `corner` [Hz] run forward
@@ -535,10 +535,15 @@ Eigen::VectorXd zeroPhaseLowPass(const Eigen::VectorXd& x, double rate, double c
 
 /// A real recording's motion, to be replayed as truth: on uniform stamps at its rate, its specific
 /// force and rate low-passed to kReplayBand without phase, its reported orientation as it is. What
-/// the real sensor added in the wave band (its bias, a standing tilt) stays: it is the motion's
+/// the real sensor added below kReplayBand (its bias, a standing tilt) stays: it is the motion's
 /// now, in every case and its null alike.
+/// @throws std::runtime_error when the recording has no rate
 gap::Recording recordedMotion(const gap::Recording& recording)
 {
+  if (!(recording.rate > 0.0))
+  {
+    throw std::runtime_error("--buoy: no sample rate in the recording's stamps");
+  }
   gap::Recording motion = recording;
   for (std::size_t i = 0; i < motion.size(); ++i)
   {
@@ -809,9 +814,10 @@ CaseResult runCase(const Case& c, const sim::Scenario& base, const gap::Recordin
     if (replayed)
     {
       // The scenario's own sensor effects and the withheld one.
-      std::vector<sim::EffectSpec> effects = base.effects;
+      std::vector<sim::EffectSpec> effects;
       if (effect == "saturation")
       {
+        effects = base.effects;
         effects.push_back(saturationFor(*replayed, k));
       }
       else

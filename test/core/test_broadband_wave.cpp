@@ -314,8 +314,8 @@ TEST(BroadbandWave, ALockOnTheDisplacementPeakIsNotOverruled)
 
 // A bench shaken at one frequency (1 cm at 0.443 Hz) that the harmonic model describes; its
 // residual holds the noise and, for its first seconds, what a fit that is still converging
-// leaves (the oscillation decaying with a 3 s memory). Over the 60 s of
-// such a bench the share stays closed: the start is no miss.
+// leaves (the oscillation decaying with a 3 s memory). Over the 60 s of such a bench the share
+// stays closed: neither the start nor the scatter of the noise's mean square is a miss.
 TEST(BroadbandWave, AConvergingFitIsNoMiss)
 {
   const double rate = 87.7, w = 2.0 * M_PI * 0.443, amplitude = 0.01;

@@ -145,7 +145,7 @@ private:
   double min_frequency_;
   HeaveFilter fixed_;
   WienerHeave spectral_;
-  /// The two ways the harmonic model's residual is measured above the band edge.
+  /// The ways the harmonic model's residual is measured above the band edge.
   static constexpr std::size_t kTwoPasses = 0;
   static constexpr std::size_t kFourPasses = 1;      ///< the vertical axis until the first design only
   static constexpr std::size_t kTwoPassesLeaky = 2;  ///< two passes, integrated without drift removal
