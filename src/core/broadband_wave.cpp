@@ -49,6 +49,7 @@ BroadbandWaveOutput BroadbandWave::update(const BroadbandWaveInput& in)
 {
   const double dt = in.dt;
   BroadbandWaveOutput out;
+  const double omega_h = 2.0 * M_PI * min_frequency_;  // the wave band's edge [rad/s]
   out.estimate = fixed_.update(in.offset_free, dt);
   // Once the spectrum has been measured, the Wiener filter designed from it replaces the fixed
   // filter's displacement and velocity (its acceleration is the wave band's either way); a design
@@ -99,7 +100,7 @@ BroadbandWaveOutput BroadbandWave::update(const BroadbandWaveInput& in)
     // Only against a locked model (before the first lock the residual is the whole wave).
     if (in.locked)
     {
-      const double high = std::exp(-dt * 2.0 * M_PI * min_frequency_);
+      const double high = std::exp(-dt * omega_h);
       const bool started = residual_samples_ > 0.0;
       const auto high_pass = [high, started](HighPass* stage, double input) {
         stage->output = started ? high * (stage->output + input - stage->input) : 0.0;
@@ -108,9 +109,11 @@ BroadbandWaveOutput BroadbandWave::update(const BroadbandWaveInput& in)
       };
       residual_samples_ += 1.0;
       const double average_missed = std::max(minute, 1.0 / residual_samples_);
-      const auto measure_missed = [&](std::size_t way, double band) {
-        const double missed = residual_heave_[way].update(band, residual_samples_ > 1.0 ? dt : 0.0).position;
+      const auto accumulate = [&](std::size_t way, double missed) {
         residual_band_variance_[way] += average_missed * (missed * missed - residual_band_variance_[way]);
+      };
+      const auto measure_missed = [&](std::size_t way, double band) {
+        accumulate(way, residual_heave_[way].update(band, residual_samples_ > 1.0 ? dt : 0.0).position);
       };
       const double two = high_pass(&residual_high_[1], high_pass(&residual_high_[0], in.residual));
       measure_missed(kTwoPasses, two);
@@ -118,11 +121,10 @@ BroadbandWaveOutput BroadbandWave::update(const BroadbandWaveInput& in)
       // 1 / (s + omega_h)^2 (the vertical axis only).
       if (vertical_)
       {
-        const double leak = (1.0 - high) / (2.0 * M_PI * min_frequency_);
+        const double leak = (1.0 - high) / omega_h;
         residual_leaky_[0] = high * residual_leaky_[0] + leak * in.residual;
         residual_leaky_[1] = high * residual_leaky_[1] + leak * residual_leaky_[0];
-        residual_band_variance_[kTwoPassesLeaky] +=
-            average_missed * (residual_leaky_[1] * residual_leaky_[1] - residual_band_variance_[kTwoPassesLeaky]);
+        accumulate(kTwoPassesLeaky, residual_leaky_[1]);
       }
       if (four_passes)
         measure_missed(kFourPasses, high_pass(&residual_high_[3], high_pass(&residual_high_[2], two)));
@@ -142,7 +144,6 @@ BroadbandWaveOutput BroadbandWave::update(const BroadbandWaveInput& in)
   // Less the white noise through the high-passes and the filter (about 1 / s^2 there): n^2 times
   // the integral of omega^(2m - 4) df / (omega^2 + omega_h^2)^m over m high-passes,
   // 1 / (8 omega_h^3) for two, 1 / (64 omega_h^3) for four.
-  const double omega_h = 2.0 * M_PI * min_frequency_;
   const double noise = noiseDensitySquared(in.rate) / ((four_passes ? 64.0 : 8.0) * omega_h * omega_h * omega_h);
   // On the vertical axis, whose share may open from the first lock on, through two high-passes
   // the miss is measured both ways and the smaller counts: the fixed filter's drift removal rings
