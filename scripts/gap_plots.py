@@ -143,9 +143,12 @@ def main():
         if r["quantity"] == "psd" and r["range"] not in bands:
             bands.append(r["range"])
     z = [[float("nan")] * len(bands) for _ in CH]
+    left_out = []  # (band, channel) cells the motion stage left out of the sensor diagnosis
     for r in feats:
         if r["quantity"] == "psd" and r["channel"] in CH:
             z[CH.index(r["channel"])][bands.index(r["range"])] = float(r["z_before"])
+            if r.get("left_out") == "1":
+                left_out.append((bands.index(r["range"]), CH.index(r["channel"])))
     fig, ax = plt.subplots(figsize=(11, 3.2))
     vals = [[max(-30, min(30, v)) if not math.isnan(v) else 0 for v in row] for row in z]
     im = ax.imshow(vals, aspect="auto", cmap="RdBu_r", vmin=-30, vmax=30)
@@ -154,7 +157,11 @@ def main():
     ax.set_xticks(range(len(bands)))
     ax.set_xticklabels([b.replace(" Hz", "") for b in bands], rotation=90, fontsize=6)
     ax.set_xlabel("band [Hz]", fontsize=7)
-    ax.set_title("gap heat map: z of log PSD per band, withheld part, scenario as given (clipped +-30): " + a.title, fontsize=8)
+    title = "gap heat map: z of log PSD per band, withheld part, base ensemble (clipped +-30)"
+    if left_out:
+        ax.scatter([c[0] for c in left_out], [c[1] for c in left_out], marker="x", color="0.4", s=18, lw=0.8)
+        title += "; x: the motion's, left out"
+    ax.set_title(title + ": " + a.title, fontsize=8)
     fig.colorbar(im, ax=ax, fraction=0.02)
     fig.tight_layout()
     save(fig, os.path.join(d, "heatmap.png"))

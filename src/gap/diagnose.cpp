@@ -241,20 +241,77 @@ void simulateBase(const DiagnoseContext& context, BaseEnsemble* base, std::vecto
   });
 }
 
-/// Gap of the withheld part of the recording against the withheld parts of some runs.
-double heldGap(const DiagnoseContext& context, const Report& rep, const std::vector<Recording>& runs)
+/// Features of the withheld parts of some runs.
+std::vector<std::vector<double>> heldMembers(const DiagnoseContext& context, const Report& rep,
+                                             const std::vector<Recording>& runs)
 {
   std::vector<std::vector<double>> members(runs.size());
   parallelFor(static_cast<int>(runs.size()), context.opt.threads, [&](int i) {
     members[i] = computeFeatures(sliceFraction(runs[i], context.opt.fit_fraction, 1.0), rep.layout_held);
   });
-  return gapOf(zScores(rep.real_held, ensembleStats(members, rep.layout_held)));
+  return members;
+}
+
+/// The median over an ensemble's members of the gap of one member against the rest.
+double typicalNullGap(const std::vector<std::vector<double>>& members, const FeatureLayout& layout)
+{
+  std::vector<double> gaps;
+  for (int i = 0; i < static_cast<int>(members.size()); ++i)
+  {
+    gaps.push_back(gapOf(leaveOneOutZ(members, i, layout)));
+  }
+  std::sort(gaps.begin(), gaps.end());
+  return gaps.empty() ? 0.0 : gaps[gaps.size() / 2];
 }
 
 /// Directional spreadings [rad] and response coherences the motion stage tries on a sea whose
 /// responses it fitted.
 const std::vector<double> kSpreadingTrials = { 0.4, 0.8 };
 const std::vector<double> kCoherenceTrials = { 0.5, 0.0 };
+
+/// The fitted motion leaves the withheld part unexplained when its gap exceeds the typical null
+/// gap this many times [-]: a motion the scenario's sea cannot take (a recorded one's spectrum, a
+/// buoy's rotations), not one a sensor effect is to be credited with.
+constexpr double kMotionUnexplained = 4.0;
+
+/// Whether a feature carries the shape of the motion, which a motion of another kind can leave
+/// unfitted: spectra, Allan deviations, spreads, the axes' correlations and, on a moving scenario,
+/// the means (the specific force's mean along the body falls with the tilt's variance,
+/// g (1 - E[theta^2] / 2); a part's mean heading with the heading's wander). At rest the tilt and
+/// heading are fitted as they are, and the means stay judged; an orientation's leak and the stamps
+/// always do.
+bool motionShape(const FeatureInfo& f, bool moving)
+{
+  return f.quantity == "psd" || f.quantity == "allan" || f.quantity == "log_std" || f.quantity == "corr" ||
+         (moving && (f.quantity == "mean" || f.quantity == "yaw_mean"));
+}
+
+/// With the motion left unexplained (kMotionUnexplained), leaves out of the sensor diagnosis every
+/// withheld feature of its shape (motionShape; `moving`: the scenario is not at rest) that a motion candidate moves (reach: by more than
+/// kMovedSpreads of the given ensemble's spreads) and that still departs from the fitted ensemble
+/// (`members`) by more than kZThreshold: the motion reaches it and could not fit it. Marks them in
+/// the report's layout.
+void leaveOutMotion(const std::vector<std::vector<double>>& members, const std::vector<double>& reach, bool moving,
+                    Report* rep)
+{
+  const double null_gap = typicalNullGap(members, rep->layout_held);
+  rep->motion.unexplained = rep->motion.gap_after > kMotionUnexplained * null_gap;
+  if (!rep->motion.differs || !rep->motion.unexplained)
+  {
+    return;
+  }
+  const std::vector<double> z = zScores(rep->real_held, ensembleStats(members, rep->layout_held));
+  for (std::size_t k = 0; k < z.size(); ++k)
+  {
+    FeatureInfo& f = rep->layout_held.info[k];
+    if (motionShape(f, moving) && reach[k] > kMovedSpreads && std::abs(z[k]) > kZThreshold)
+    {
+      f.left_out = true;
+      rep->motion.left_out.push_back(f.channel + " " + f.quantity + (f.range.empty() ? "" : " " + f.range) + " " +
+                                     f.segment);
+    }
+  }
+}
 
 /// 0. Motion: a tilt, heading or sea state of its own is fitted before any sensor effect, then the
 /// sea's responses and spreading; the fit that brings the withheld part closest becomes the
@@ -282,21 +339,33 @@ void motionStage(DiagnoseContext* context, BaseEnsemble* base, Report* rep)
     }
     rep->motion.differs = true;
   }
-  rep->motion.gap_before = heldGap(*context, *rep, base->runs);
+  const std::vector<std::vector<double>> given_members = heldMembers(*context, *rep, base->runs);
+  const EnsembleStats given = ensembleStats(given_members, rep->layout_held);
+  rep->motion.gap_before = gapOf(zScores(rep->real_held, given));
   double best = rep->motion.gap_before;
   std::vector<Recording> best_runs;  // the adopted fit's runs (empty: the base's)
+  std::vector<std::vector<double>> best_members = given_members;
+  // How far any motion candidate moves each feature, in spreads of the given ensemble.
+  std::vector<double> reach(given.median.size(), 0.0);
   // Each candidate's ensemble, and its withheld gap; the closest is adopted.
   const auto consider = [&](const MotionCandidate& candidate) {
     std::vector<Recording> runs(context->runs);
     parallelFor(context->runs, context->opt.threads,
                 [&](int i) { runs[i] = simulateRecording(candidate.scenario, context->seed(i)); });
-    const double gap = heldGap(*context, *rep, runs);
+    std::vector<std::vector<double>> members = heldMembers(*context, *rep, runs);
+    const EnsembleStats stats = ensembleStats(members, rep->layout_held);
+    for (std::size_t k = 0; k < reach.size(); ++k)
+    {
+      reach[k] = std::max(reach[k], std::abs(stats.median[k] - given.median[k]) / given.spread[k]);
+    }
+    const double gap = gapOf(zScores(rep->real_held, stats));
     if (gap < best)
     {
       best = gap;
       rep->motion.adopted = candidate.what;
       rep->motion.fitted = candidate.scenario;
       best_runs = std::move(runs);
+      best_members = std::move(members);
       best_summaries.reset();  // summarised when needed
     }
   };
@@ -359,6 +428,8 @@ void motionStage(DiagnoseContext* context, BaseEnsemble* base, Report* rep)
     consider(*short_waves);
   }
   rep->motion_csv = motionCsv(rep->motion, adopted_summaries());
+  rep->motion.gap_after = best;
+  leaveOutMotion(best_members, reach, context->scenario.motion.type != sim::MotionType::kStatic, rep);
   if (!rep->motion.adopted.empty())
   {
     context->scenario = rep->motion.fitted;
@@ -428,10 +499,9 @@ std::vector<Recording> withheldStage(const DiagnoseContext& context, BaseEnsembl
   rep->ens_held = ensembleStats(rep->ens_held_members, rep->layout_held);
   *z_before = zScores(rep->real_held, rep->ens_held);
   rep->gap_before = gapOf(*z_before);
-  rep->motion.gap_after = rep->gap_before;
-  if (rep->motion.adopted.empty())
+  if (!rep->motion.differs)
   {
-    rep->motion.gap_before = rep->gap_before;
+    rep->motion.gap_before = rep->motion.gap_after = rep->gap_before;
   }
   std::vector<double> null_gaps;
   rep->null_z_held.clear();
@@ -761,7 +831,7 @@ void localise(Report* rep)
 std::string featuresCsv(const Report& rep, const std::vector<double>& z_before)
 {
   std::ostringstream fs;
-  fs << "index,channel,quantity,range,segment,lo,hi,real,sim,spread,z_before,z_after\n";
+  fs << "index,channel,quantity,range,segment,lo,hi,real,sim,spread,z_before,z_after,left_out\n";
   for (std::size_t i = 0; i < rep.layout_held.info.size(); ++i)
   {
     const FeatureInfo& f = rep.layout_held.info[i];
@@ -769,7 +839,7 @@ std::string featuresCsv(const Report& rep, const std::vector<double>& z_before)
        << "," << num(f.hi) << "," << num(rep.real_held[i]) << "," << num(rep.ens_held.median[i]) << ","
        << num(rep.ens_held.spread[i]) << "," << num(z_before[i]) << ","
        << num(rep.best >= 0 && !rep.ranking[rep.best].z_after.empty() ? rep.ranking[rep.best].z_after[i] : z_before[i])
-       << "\n";
+       << "," << (f.left_out ? 1 : 0) << "\n";
   }
   return fs.str();
 }
@@ -897,7 +967,9 @@ nlohmann::ordered_json motionJson(const MotionFit& m)
            { "scenario", motionSummaryJson(m.scenario) },
            { "findings", m.findings },
            { "gap_before", sixDigits(m.gap_before) },
-           { "gap_after", sixDigits(m.gap_after) } };
+           { "gap_after", sixDigits(m.gap_after) },
+           { "unexplained", m.unexplained },
+           { "left_out", m.left_out } };
 }
 
 nlohmann::ordered_json departuresJson(const std::vector<Departure>& departures)
@@ -988,6 +1060,9 @@ std::string reportSummary(const Report& r)
   o << buf;
   for (const std::string& finding : r.motion.findings)
     o << "  " << finding << "\n";
+  if (!r.motion.left_out.empty())
+    o << "  the fitted motion leaves the withheld part unexplained: " << r.motion.left_out.size()
+      << " features it reaches and does not fit are left out of the sensor diagnosis\n";
   std::snprintf(buf, sizeof(buf),
                 "WHERE (whole recording): gap %.3g (ensemble member vs rest: up to %.3g), %zu departures; largest:\n",
                 r.gap_all, r.null_gap, r.where.size());

@@ -231,6 +231,7 @@ EnsembleStats ensembleStats(const std::vector<std::vector<double>>& members, con
   const std::size_t nf = L.info.size();
   s.median.resize(nf);
   s.spread.resize(nf);
+  s.left_out.resize(nf);
   for (std::size_t i = 0; i < nf; ++i)
   {
     std::vector<double> v;
@@ -254,6 +255,11 @@ EnsembleStats ensembleStats(const std::vector<std::vector<double>>& members, con
     const double mad = 1.4826 * median(dev);
     s.median[i] = med;
     s.spread[i] = std::max({ mad, std::sqrt(var), L.info[i].floor + L.info[i].rel_floor * std::abs(med) });
+    s.left_out[i] = L.info[i].left_out;
+    if (L.info[i].left_out)
+    {
+      s.spread[i] = 1.0;  // no spread penalty (gapOf) on a feature that does not count
+    }
   }
   return s;
 }
@@ -264,7 +270,8 @@ std::vector<double> zScores(const std::vector<double>& features, const EnsembleS
   for (std::size_t i = 0; i < features.size(); ++i)
   {
     const double d = features[i] - stats.median[i];
-    z[i] = std::isfinite(d) ? d / stats.spread[i] : 0.0;
+    const bool left_out = i < stats.left_out.size() && stats.left_out[i];
+    z[i] = std::isfinite(d) && !left_out ? d / stats.spread[i] : 0.0;
     z[i] = std::max(-1e4, std::min(1e4, z[i]));
   }
   return z;
@@ -324,7 +331,8 @@ OwnShrink ownShrink(const std::vector<double>& real, const EnsembleStats& base, 
   std::vector<std::size_t> moved;
   for (std::size_t k = 0; k < base.median.size() && k < candidate.median.size(); ++k)
   {
-    if (std::abs(candidate.median[k] - base.median[k]) > kMovedSpreads * base.spread[k])
+    const bool left_out = k < base.left_out.size() && base.left_out[k];
+    if (!left_out && std::abs(candidate.median[k] - base.median[k]) > kMovedSpreads * base.spread[k])
     {
       moved.push_back(k);
     }

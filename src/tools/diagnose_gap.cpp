@@ -315,6 +315,18 @@ std::string reportMarkdown(const gap::Report& rep, const Options& o, bool plots)
       m.findings.empty() ? "" : "\n", m.real.roll, m.real.pitch, m.real.wave_height, m.real.peak_period,
       m.scenario.roll, m.scenario.pitch, m.scenario.wave_height, m.scenario.peak_period, m.gap_before, m.gap_after);
   md << buf;
+  if (!m.left_out.empty())
+  {
+    md << "The fitted motion leaves the withheld part far beyond the ensemble's own spread (a motion the "
+          "scenario's kind cannot take): its "
+       << m.left_out.size()
+       << " features that the motion reaches and the fit leaves departed are left out of the sensor diagnosis "
+          "(`left_out` in features.csv), so that no sensor effect is credited with them; an effect that acts only "
+          "there cannot be named. They include: ";
+    for (std::size_t i = 0; i < std::min<std::size_t>(6, m.left_out.size()); ++i)
+      md << (i ? ", " : "") << "`" << m.left_out[i] << "`";
+    md << (m.left_out.size() > 6 ? ", ...\n\n" : ".\n\n");
+  }
   if (plots && !rep.motion_csv.empty())
     md << "![heave spectra: recording, scenario as given, fitted](motion.png)\n\n";
   md << "## 1. Where (whole recording)\n\n";

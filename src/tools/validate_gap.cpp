@@ -534,11 +534,14 @@ Eigen::VectorXd zeroPhaseLowPass(const Eigen::VectorXd& x, double rate, double c
 }
 
 /// A real recording's motion, to be replayed as truth: on uniform stamps at its rate, its specific
-/// force and rate low-passed to kReplayBand without phase, its reported orientation as it is. What
-/// the real sensor added below kReplayBand (its bias, a standing tilt) stays: it is the motion's
-/// now, in every case and its null alike.
+/// force and rate low-passed to kReplayBand without phase, its reported orientation as it is. A
+/// moored buoy neither turns nor accelerates on average, so what says otherwise is the real
+/// sensor's, not the motion's, and is taken off: the rate's mean (the gyro's bias) and the mean
+/// specific force in the reported frame less `gravity` straight up (the accelerometer's bias and
+/// its AHRS's tilt error, which a motion consistent with its orientation does not have). Without a
+/// reported orientation the specific force is left as it is.
 /// @throws std::runtime_error when the recording has no rate
-gap::Recording recordedMotion(const gap::Recording& recording)
+gap::Recording recordedMotion(const gap::Recording& recording, double gravity)
 {
   if (!(recording.rate > 0.0))
   {
@@ -552,6 +555,22 @@ gap::Recording recordedMotion(const gap::Recording& recording)
   for (Eigen::Index c = 0; c < motion.data.cols(); ++c)
   {
     motion.data.col(c) = zeroPhaseLowPass(recording.data.col(c), recording.rate, kReplayBand);
+  }
+  motion.data.rightCols<3>().rowwise() -= motion.data.rightCols<3>().colwise().mean();
+  if (motion.has_orientation && motion.orientation.size() == motion.size() && motion.size() > 0)
+  {
+    Eigen::Vector3d level_mean = Eigen::Vector3d::Zero();
+    for (std::size_t i = 0; i < motion.size(); ++i)
+    {
+      level_mean += motion.orientation[i] * Eigen::Vector3d(motion.data.row(static_cast<Eigen::Index>(i)).head<3>());
+    }
+    level_mean /= static_cast<double>(motion.size());
+    const Eigen::Vector3d excess = level_mean - Eigen::Vector3d(0.0, 0.0, gravity);
+    for (std::size_t i = 0; i < motion.size(); ++i)
+    {
+      motion.data.row(static_cast<Eigen::Index>(i)).head<3>() -=
+          (motion.orientation[i].conjugate() * excess).transpose();
+    }
   }
   return motion;
 }
@@ -891,8 +910,9 @@ std::vector<CaseResult> runCases(const Options& opt, const Grid& grid)
         const double span = buoy->stamp.back() - buoy->stamp.front() + 1.0 / buoy->rate;
         buoy = gap::sliceFraction(*buoy, 0.0, opt.duration / span);
       }
-      buoy = recordedMotion(*buoy);
-      base = gap::matchScenario(sim::loadScenario(opt.buoy_scenario), *buoy);
+      const sim::Scenario given = sim::loadScenario(opt.buoy_scenario);
+      buoy = recordedMotion(*buoy, given.gravity);
+      base = gap::matchScenario(given, *buoy);
     }
     else
     {

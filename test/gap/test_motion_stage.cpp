@@ -138,3 +138,46 @@ TEST(GapMotion, AHullThatDoesNotFollowShortWavesIsFittedItsLength)
   findings.clear();
   EXPECT_FALSE(gap::fitShortWaves(real, recorded, runs(recorded), &findings).has_value()) << findings.front();
 }
+
+namespace
+{
+/// A "recording" whose motion no sea of the scenario's kind makes: a buoy on a bench rig, heave,
+/// roll and pitch as pure lines at their own periods, with the scenario's sensor; and, when
+/// `noisy`, an accelerometer five times as noisy.
+gap::Recording rigRecording(bool noisy, std::uint64_t seed)
+{
+  sim::Scenario rig = mooredSea(1.5, 8.0);
+  rig.motion.type = sim::MotionType::kSinusoids;
+  rig.motion.sinusoids[sim::kHeave] = { 0.6, 1.0 / 9.0, 0.0 };
+  rig.motion.sinusoids[sim::kRoll] = { 0.08, 1.0 / 5.0, 0.3 };
+  rig.motion.sinusoids[sim::kPitch] = { 0.05, 1.0 / 13.0, 1.1 };
+  if (noisy)
+    rig.effects[0].params["accel_density"] = { 5e-3 };
+  return gap::simulateRecording(rig, seed);
+}
+}  // namespace
+
+TEST(GapMotion, AMotionTheScenarioCannotTakeIsLeftOutAndTheNoiseStillNamed)
+{
+  // Without leaving the motion's departures out, the lines' spectra (gap about 1) bury the noise,
+  // which no candidate then explains enough of to be named.
+  const sim::Scenario scenario = mooredSea(1.5, 8.0);
+  gap::DiagnoseOptions opt;
+  opt.ensemble = periodic_bias_compensation::test::ensembleToRun(opt.ensemble);
+  const gap::Report noisy = gap::diagnose(rigRecording(true, 21), scenario, opt);
+  ASSERT_TRUE(noisy.motion.differs) << gap::reportSummary(noisy);
+  EXPECT_TRUE(noisy.motion.unexplained) << gap::reportSummary(noisy);
+  EXPECT_FALSE(noisy.motion.left_out.empty()) << gap::reportSummary(noisy);
+  EXPECT_LT(noisy.gap_before, noisy.motion.gap_after) << gap::reportSummary(noisy);
+  EXPECT_EQ(gap::reportJson(noisy).at("motion").at("left_out").size(), noisy.motion.left_out.size());
+  if (periodic_bias_compensation::test::kSanitized)
+  {
+    return;  // the verdicts below need the full ensemble: asserted by the normal build
+  }
+  EXPECT_EQ(noisy.verdict_effect, "white_noise") << gap::reportSummary(noisy);
+  // The same rig with the scenario's own sensor: the motion is left out, and no sensor effect is
+  // confidently made of what remains.
+  const gap::Report plain = gap::diagnose(rigRecording(false, 21), scenario, opt);
+  EXPECT_TRUE(plain.motion.unexplained) << gap::reportSummary(plain);
+  EXPECT_LT(plain.confidence, 0.5) << gap::reportSummary(plain);
+}

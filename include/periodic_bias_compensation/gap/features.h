@@ -23,6 +23,9 @@ struct FeatureInfo
   std::string stage;       ///< "sensor" (raw data), "stamps", "orientation"
   double floor = 0.0;      ///< smallest spread used for z-scores [feature unit]
   double rel_floor = 0.0;  ///< plus this fraction of |ensemble median|
+  /// Left out of the gap (z-score 0): a departure of the motion that the motion stage reaches but
+  /// could not fit, which no sensor effect is to be credited with.
+  bool left_out = false;
 };
 
 /// A feature of time segment s of `segments` over `duration` s (range = its time span).
@@ -55,11 +58,12 @@ std::vector<double> computeFeatures(const Recording& recording, const FeatureLay
 struct EnsembleStats
 {
   std::vector<double> median;
-  std::vector<double> spread;  ///< max(1.4826 MAD, floor)
+  std::vector<double> spread;  ///< max(1.4826 MAD, floor); 1 where the feature is left out
+  std::vector<char> left_out;  ///< the layout's FeatureInfo::left_out
 };
 EnsembleStats ensembleStats(const std::vector<std::vector<double>>& members, const FeatureLayout& layout);
 
-/// z-scores of a feature vector against an ensemble.
+/// z-scores of a feature vector against an ensemble (0 where a feature is left out).
 std::vector<double> zScores(const std::vector<double>& features, const EnsembleStats& stats);
 
 /// z-scores of member i of an ensemble against the other members.

@@ -56,6 +56,12 @@ struct MotionFit
   sim::Scenario fitted;                     ///< the scenario with the adopted candidate (as given without)
   double gap_before = 0.0;                  ///< withheld gap against the scenario as given
   double gap_after = 0.0;                   ///< against `fitted` (equal when nothing is adopted)
+  /// `fitted` leaves the withheld part far beyond the null gap: the motion is one the scenario's
+  /// kind of motion cannot take.
+  bool unexplained = false;
+  /// Then the withheld features the motion reaches and the fit leaves departed ("channel quantity
+  /// range segment"): left out of the sensor diagnosis.
+  std::vector<std::string> left_out;
 };
 
 /// Compares the recording with runs of the scenario (same duration and rate). A standing tilt
