@@ -280,7 +280,8 @@ class Bench:
             messages = int(runs[-1]['fields']['messages'])
             del rss[:]  # the last repetition's is plotted
             for label, extra, sample in (('compensate_bag', [], rss),
-                                         ('compensate_bag_lz4', ['--compression', 'lz4'], None)):
+                                         ('compensate_bag_lz4', ['--compression', 'lz4'], None),
+                                         ('compensate_bag_filtered', ['--outputs', 'filtered'], None)):
                 if os.path.exists(out):
                     os.remove(out)
                 wall = float('%.2f' % self.timed([self.exe('compensate_bag'), '--in', bag, '--out', out] + extra,

@@ -105,7 +105,7 @@ def nodelet_plot(runs, png):
 
 def _bag_runs(bag):
     """The bag's runs by label, and their median messages per second and wall time."""
-    runs = {'floor': [], 'whole_bag': [], 'compensate_bag': [], 'compensate_bag_lz4': []}
+    runs = {'floor': [], 'whole_bag': [], 'compensate_bag': [], 'compensate_bag_lz4': [], 'compensate_bag_filtered': []}
     for r in bag['runs']:
         runs[r['label']].append(r['fields'])
     rate = {k: statistics.median(float(r['messages_per_s']) for r in v) for k, v in runs.items() if v}
@@ -132,7 +132,8 @@ def bag_markdown(bags, core_rows):
         rows = [('read-only floor, IMU topic (`bag_read_floor`)', 'floor'),
                 ('read-only floor, whole bag (`bag_read_floor --whole-bag`)', 'whole_bag'),
                 ('`compensate_bag`', 'compensate_bag'),
-                ('`compensate_bag --compression lz4`', 'compensate_bag_lz4')]
+                ('`compensate_bag --compression lz4`', 'compensate_bag_lz4'),
+                ('`compensate_bag --outputs filtered` (the navigation output alone)', 'compensate_bag_filtered')]
         for title, key in rows:
             if key not in rate:
                 continue
