@@ -287,16 +287,16 @@ bool motionShape(const FeatureInfo& f, bool moving)
 }
 
 /// With the motion left unexplained (kMotionUnexplained), leaves out of the sensor diagnosis every
-/// withheld feature of its shape (motionShape; `moving`: the scenario is not at rest) that a motion candidate moves (reach: by more than
-/// kMovedSpreads of the given ensemble's spreads) and that still departs from the fitted ensemble
-/// (`members`) by more than kZThreshold: the motion reaches it and could not fit it. Marks them in
-/// the report's layout.
+/// withheld feature of its shape (motionShape; `moving`: the scenario is not at rest) that a
+/// motion candidate moves (reach: by more than kMovedSpreads of the given ensemble's spreads) and
+/// that still departs from the fitted ensemble (`members`) by more than kZThreshold: the motion
+/// reaches it and could not fit it. Marks them in the report's layout.
 void leaveOutMotion(const std::vector<std::vector<double>>& members, const std::vector<double>& reach, bool moving,
                     Report* rep)
 {
   const double null_gap = typicalNullGap(members, rep->layout_held);
   rep->motion.unexplained = rep->motion.gap_after > kMotionUnexplained * null_gap;
-  if (!rep->motion.differs || !rep->motion.unexplained)
+  if (!rep->motion.unexplained)
   {
     return;
   }

@@ -1196,7 +1196,8 @@ int main(int argc, char** argv)
       "Withholds each named effect from a simulated 'real' recording, diagnoses the gap against the\n"
       "scenario without it and scores the verdicts (docs/gap.md). --bench-hours H times one diagnosis\n"
       "of H hours of 100 Hz data instead. --buoy adds the motion 'buoy-replay': the moored buoy's\n"
-      "recorded motion (../shared/data/buoy_morro_bay, low-passed at 1 Hz) under YAML's sensor\n"
+      "recorded motion (../shared/data/buoy_morro_bay, low-passed at 1 Hz, its mean rate and the\n"
+      "mean specific force beyond gravity taken off: the real sensor's) under YAML's sensor\n"
       "effects and the withheld one, against YAML (all of it, or its first S seconds when\n"
       "--duration S is given).\n");
   cli.flag("--small", &opt.small)
