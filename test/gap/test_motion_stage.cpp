@@ -166,14 +166,16 @@ TEST(GapMotion, AMotionTheScenarioCannotTakeIsLeftOutAndTheNoiseStillNamed)
   opt.ensemble = periodic_bias_compensation::test::ensembleToRun(opt.ensemble);
   const gap::Report noisy = gap::diagnose(rigRecording(true, 21), scenario, opt);
   ASSERT_TRUE(noisy.motion.differs) << gap::reportSummary(noisy);
-  EXPECT_TRUE(noisy.motion.unexplained) << gap::reportSummary(noisy);
-  EXPECT_FALSE(noisy.motion.left_out.empty()) << gap::reportSummary(noisy);
-  EXPECT_LT(noisy.gap_before, noisy.motion.gap_after) << gap::reportSummary(noisy);
   EXPECT_EQ(gap::reportJson(noisy).at("motion").at("left_out").size(), noisy.motion.left_out.size());
   if (periodic_bias_compensation::test::kSanitized)
   {
-    return;  // the verdicts below need the full ensemble: asserted by the normal build
+    // Three runs leave two to judge each against: the null gap is too wide to call the motion
+    // unexplained. The rest needs the full ensemble: asserted by the normal build.
+    return;
   }
+  EXPECT_TRUE(noisy.motion.unexplained) << gap::reportSummary(noisy);
+  EXPECT_FALSE(noisy.motion.left_out.empty()) << gap::reportSummary(noisy);
+  EXPECT_LT(noisy.gap_before, noisy.motion.gap_after) << gap::reportSummary(noisy);
   EXPECT_EQ(noisy.verdict_effect, "white_noise") << gap::reportSummary(noisy);
   // The same rig with the scenario's own sensor: the motion is left out, and no sensor effect is
   // confidently made of what remains.
