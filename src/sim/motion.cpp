@@ -378,7 +378,11 @@ Truth ShipMotion::evaluate(std::int64_t k)
 
   Truth out;
   const double r = slow.yaw_rate;
-  const Eigen::AngleAxisd rz(slow.heading, Vector3::UnitZ());
+  // The heading's rotation about z, with one sine and cosine for the three vectors it turns.
+  const double ch = std::cos(slow.heading), sh = std::sin(slow.heading);
+  const auto rz = [ch, sh](const Vector3& x) {
+    return Vector3(ch * x.x() - sh * x.y(), sh * x.x() + ch * x.y(), x.z());
+  };
   const auto perp = [](const Vector3& x) { return Vector3(-x.y(), x.x(), 0.0); };
   const Vector3 q(d[0], d[3], d[6]);
   const Vector3 dq(d[1], d[4], d[7]);
@@ -388,9 +392,9 @@ Truth ShipMotion::evaluate(std::int64_t k)
   out.slow_acceleration = slow.acceleration;
   out.slow_heading = slow.heading;
   out.slow_yaw_rate = r;
-  out.wave_position = rz * q;
-  out.wave_velocity = rz * (dq + r * perp(q));
-  out.wave_acceleration = rz * (ddq + 2.0 * r * perp(dq) + r * r * perp(perp(q)));
+  out.wave_position = rz(q);
+  out.wave_velocity = rz(dq + r * perp(q));
+  out.wave_acceleration = rz(ddq + 2.0 * r * perp(dq) + r * r * perp(perp(q)));
   out.position = out.slow_position + out.wave_position;
   out.velocity = out.slow_velocity + out.wave_velocity;
   out.acceleration = out.slow_acceleration + out.wave_acceleration;
@@ -398,9 +402,13 @@ Truth ShipMotion::evaluate(std::int64_t k)
   const double phi = motion_.roll + d[9], phi_d = d[10], phi_dd = d[11];
   const double th = motion_.pitch + d[12], th_d = d[13], th_dd = d[14];
   const double psi = slow.heading + d[15], psi_d = r + d[16], psi_dd = d[17];
-  out.attitude = Eigen::AngleAxisd(psi, Vector3::UnitZ()) * Eigen::AngleAxisd(th, Vector3::UnitY()) *
-                 Eigen::AngleAxisd(phi, Vector3::UnitX());
-  const double sp = std::sin(phi), cp = std::cos(phi), st = std::sin(th), ct = std::cos(th);
+  // Rz(psi) Ry(th) Rx(phi) from the half angles' sines and cosines; the whole angles' follow from them.
+  const double cx = std::cos(0.5 * phi), sx = std::sin(0.5 * phi);
+  const double cy = std::cos(0.5 * th), sy = std::sin(0.5 * th);
+  const double cz = std::cos(0.5 * psi), sz = std::sin(0.5 * psi);
+  out.attitude = Quaternion(cz * cy * cx + sz * sy * sx, cz * cy * sx - sz * sy * cx, cz * sy * cx + sz * cy * sx,
+                            sz * cy * cx - cz * sy * sx);
+  const double sp = 2.0 * sx * cx, cp = cx * cx - sx * sx, st = 2.0 * sy * cy, ct = cy * cy - sy * sy;
   out.angular_rate = Vector3(phi_d - psi_d * st, th_d * cp + psi_d * ct * sp, -th_d * sp + psi_d * ct * cp);
   out.angular_acceleration =
       Vector3(phi_dd - psi_dd * st - psi_d * ct * th_d,
