@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <functional>
+#include <future>
 #include <set>
 #include <sstream>
 
@@ -274,6 +275,11 @@ const std::vector<double> kCoherenceTrials = { 0.5, 0.0 };
 /// buoy's rotations), not one a sensor effect is to be credited with.
 constexpr double kMotionUnexplained = 4.0;
 
+/// Runs of a motion candidate's ensemble on which it is screened [-] (on the ensemble's first
+/// seeds; the adopted candidate is simulated on the rest): half of the default ensemble, the
+/// motion's shape moving the features by many spreads where it differs.
+constexpr int kMotionScreenRuns = 4;
+
 /// Whether a feature carries the shape of the motion, which a motion of another kind can leave
 /// unfitted: spectra, Allan deviations, spreads, the axes' correlations and, on a moving scenario,
 /// the means (the specific force's mean along the body falls with the tilt's variance,
@@ -340,17 +346,21 @@ void motionStage(DiagnoseContext* context, BaseEnsemble* base, Report* rep)
     rep->motion.differs = true;
   }
   const std::vector<std::vector<double>> given_members = heldMembers(*context, *rep, base->runs);
-  const EnsembleStats given = ensembleStats(given_members, rep->layout_held);
-  rep->motion.gap_before = gapOf(zScores(rep->real_held, given));
-  double best = rep->motion.gap_before;
+  rep->motion.gap_before = gapOf(zScores(rep->real_held, ensembleStats(given_members, rep->layout_held)));
+  // The candidates are screened on the first `screen` seeds of the ensemble (the base's runs on
+  // the same seeds are the reference); the adopted one is completed to the whole ensemble.
+  const int screen = std::min(context->runs, kMotionScreenRuns);
+  const std::vector<std::vector<double>> given_screen(given_members.begin(), given_members.begin() + screen);
+  const EnsembleStats given = ensembleStats(given_screen, rep->layout_held);
+  double best = gapOf(zScores(rep->real_held, given));
   std::vector<Recording> best_runs;  // the adopted fit's runs (empty: the base's)
-  std::vector<std::vector<double>> best_members = given_members;
+  std::vector<std::vector<double>> best_members = given_screen;
   // How far any motion candidate moves each feature, in spreads of the given ensemble.
   std::vector<double> reach(given.median.size(), 0.0);
   // Each candidate's ensemble, and its withheld gap; the closest is adopted.
   const auto consider = [&](const MotionCandidate& candidate) {
-    std::vector<Recording> runs(context->runs);
-    parallelFor(context->runs, context->opt.threads,
+    std::vector<Recording> runs(screen);
+    parallelFor(screen, context->opt.threads,
                 [&](int i) { runs[i] = simulateRecording(candidate.scenario, context->seed(i)); });
     std::vector<std::vector<double>> members = heldMembers(*context, *rep, runs);
     const EnsembleStats stats = ensembleStats(members, rep->layout_held);
@@ -427,8 +437,25 @@ void motionStage(DiagnoseContext* context, BaseEnsemble* base, Report* rep)
     rep->motion.candidates.push_back(*short_waves);
     consider(*short_waves);
   }
+  if (rep->motion.adopted.empty())
+  {
+    best_members = given_members;
+  }
+  else
+  {
+    best_runs.resize(context->runs);
+    parallelFor(context->runs - screen, context->opt.threads, [&](int i) {
+      best_runs[screen + i] = simulateRecording(rep->motion.fitted, context->seed(screen + i));
+    });
+    const std::vector<Recording> rest(best_runs.begin() + screen, best_runs.end());
+    for (std::vector<double>& member : heldMembers(*context, *rep, rest))
+    {
+      best_members.push_back(std::move(member));
+    }
+    best_summaries.reset();
+  }
   rep->motion_csv = motionCsv(rep->motion, adopted_summaries());
-  rep->motion.gap_after = best;
+  rep->motion.gap_after = gapOf(zScores(rep->real_held, ensembleStats(best_members, rep->layout_held)));
   leaveOutMotion(best_members, reach, context->scenario.motion.type != sim::MotionType::kStatic, rep);
   if (!rep->motion.adopted.empty())
   {
@@ -437,14 +464,23 @@ void motionStage(DiagnoseContext* context, BaseEnsemble* base, Report* rep)
   }
 }
 
-/// The compensator's pipeline stages on the real recording against the same on every run, the
-/// runs in threads (the core and the spectra plan FFTW under one lock, fftw_planner.h).
-void compensatorStage(const DiagnoseContext& context, const BaseEnsemble& base, Report* rep)
+/// The compensator's pipeline stages of the real recording, which depend on nothing simulated: with
+/// more than one thread they are worked out beside the stages before theirs.
+std::future<std::vector<double>> realStages(const DiagnoseContext& context)
+{
+  return std::async(context.opt.threads > 1 ? std::launch::async : std::launch::deferred,
+                    [&context]() { return stageFeatures(context.real, 4); });
+}
+
+/// The compensator's pipeline stages on the real recording (realStages) against the same on every
+/// run, the runs in threads (the core and the spectra plan FFTW under one lock, fftw_planner.h).
+void compensatorStage(const DiagnoseContext& context, const BaseEnsemble& base,
+                      std::future<std::vector<double>>* real_stages, Report* rep)
 {
   std::vector<std::vector<double>> stage_members(context.runs);
   parallelFor(context.runs, context.opt.threads, [&](int i) { stage_members[i] = stageFeatures(base.runs[i], 4); });
   const FeatureLayout layout = stageLayout(rep->duration, 4);
-  rep->stage_where = rankDepartures(stageFeatures(context.real, 4), ensembleStats(stage_members, layout), layout);
+  rep->stage_where = rankDepartures(real_stages->get(), ensembleStats(stage_members, layout), layout);
 }
 
 /// The recording minus the ideal IMU of its truth, against the same residual of every run.
@@ -569,18 +605,20 @@ void judge(const DiagnoseContext& context, const Report& rep, std::vector<Candid
   const int nc = static_cast<int>(list->size());
   std::vector<std::vector<std::vector<double>>> feats(nc, std::vector<std::vector<double>>(runs));
   std::vector<std::string> errors(nc);
-  parallelFor(nc * runs, context.opt.threads, [&](int idx) {
-    const int c = idx / runs, i = idx % runs;
-    try
-    {
-      const sim::Scenario s = withCandidate(context.scenario, (*list)[c].specs);
-      Recording r = simulateRecording(s, context.seed(i));
+  std::vector<sim::Scenario> scenarios;
+  for (const Candidate& candidate : *list)
+  {
+    scenarios.push_back(withCandidate(context.scenario, candidate.specs));
+  }
+  // Per seed, every candidate on the one motion (they differ only in their effects).
+  parallelFor(runs, context.opt.threads, [&](int i) {
+    const std::vector<std::string> failed = simulateVariants(scenarios, context.seed(i), [&](int c, Recording& r) {
       r.rate = context.real.rate;
       feats[c][i] = computeFeatures(sliceFraction(r, context.opt.fit_fraction, 1.0), rep.layout_held);
-    }
-    catch (const std::exception& e)
+    });
+    if (i == 0)
     {
-      errors[c] = e.what();
+      errors = failed;
     }
   });
   for (int c = 0; c < nc; ++c)
@@ -923,10 +961,11 @@ Report diagnose(const Recording& real_in, const sim::Scenario& scenario_in, cons
   const auto wall0 = std::chrono::steady_clock::now();
   Report rep;
   DiagnoseContext context = prepare(real_in, scenario_in, opt, &rep);
+  std::future<std::vector<double>> real_stages = realStages(context);
   BaseEnsemble base;
   simulateBase(context, &base);
   motionStage(&context, &base, &rep);
-  compensatorStage(context, base, &rep);
+  compensatorStage(context, base, &real_stages, &rep);
   if (context.truth)
   {
     truthStage(context, base, &rep);

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <complex>
 #include <limits>
+#include <memory>
 #include <mutex>
 #include <stdexcept>
 #include <thread>
@@ -661,21 +662,34 @@ Recording sliceFraction(const Recording& recording, double from, double to)
   return out;
 }
 
-Recording simulateRecording(const sim::Scenario& scenario, std::uint64_t seed, bool keep_truth)
+namespace
 {
-  sim::Simulator simulator(scenario, seed);
+/// What of a truth the sensor effects read (sim::Simulator::next(const Truth&, Sample*)), kept
+/// compact while a motion is shared.
+struct SensorTruth
+{
+  Eigen::Quaterniond attitude;
+  Eigen::Vector3d acceleration;
+  Eigen::Vector3d angular_rate;
+  Eigen::Vector3d angular_acceleration;
+};
+
+/// The recording of the samples `next(Sample*)` produces until it returns false (`count` of them
+/// at most), dropped samples removed, with the truth kept when asked.
+template <class Next>
+Recording record(const sim::Scenario& scenario, std::uint64_t seed, std::int64_t count, bool keep_truth, Next next)
+{
   Recording r;
   r.rate = scenario.rate;
   r.source = "sim seed " + std::to_string(seed);
-  const std::int64_t n = simulator.sampleCount();
-  r.stamp.reserve(n);
-  r.data.resize(n, kChannels);
+  r.stamp.reserve(count);
+  r.data.resize(count, kChannels);
   r.has_orientation = true;
-  r.orientation.reserve(n);
+  r.orientation.reserve(count);
   r.has_temperature = scenario.temperature.enabled;
   sim::Sample s;
   std::int64_t k = 0;
-  while (simulator.next(&s))
+  while (next(&s))
   {
     if (s.dropped)
     {
@@ -703,6 +717,80 @@ Recording simulateRecording(const sim::Scenario& scenario, std::uint64_t seed, b
   }
   r.data.conservativeResize(k, kChannels);
   return r;
+}
+}  // namespace
+
+Recording simulateRecording(const sim::Scenario& scenario, std::uint64_t seed, bool keep_truth)
+{
+  sim::Simulator simulator(scenario, seed);
+  return record(scenario, seed, simulator.sampleCount(), keep_truth,
+                [&simulator](sim::Sample* s) { return simulator.next(s); });
+}
+
+std::vector<std::string> simulateVariants(const std::vector<sim::Scenario>& scenarios, std::uint64_t seed,
+                                          const std::function<void(int, Recording&)>& use)
+{
+  const int n = static_cast<int>(scenarios.size());
+  std::vector<std::string> errors(n);
+  std::vector<std::unique_ptr<sim::Simulator>> simulators(n);
+  for (int v = 0; v < n; ++v)
+  {
+    try
+    {
+      simulators[v] = std::make_unique<sim::Simulator>(scenarios[v], seed);
+    }
+    catch (const std::exception& e)
+    {
+      errors[v] = e.what();
+    }
+  }
+  // The first variant that can be simulated evaluates the motion and keeps it for the others.
+  std::vector<SensorTruth> motion;
+  bool evaluated = false;
+  for (int v = 0; v < n; ++v)
+  {
+    if (!simulators[v])
+    {
+      continue;
+    }
+    sim::Simulator& simulator = *simulators[v];
+    const std::int64_t count = simulator.sampleCount();
+    Recording r;
+    if (!evaluated)
+    {
+      motion.reserve(count);
+      r = record(scenarios[v], seed, count, false, [&](sim::Sample* s) {
+        if (!simulator.next(s))
+          return false;
+        motion.push_back(
+            { s->truth.attitude, s->truth.acceleration, s->truth.angular_rate, s->truth.angular_acceleration });
+        return true;
+      });
+      evaluated = true;
+    }
+    else
+    {
+      if (count != static_cast<std::int64_t>(motion.size()))
+      {
+        throw std::invalid_argument("simulateVariants: the scenarios differ in more than their effects");
+      }
+      std::size_t k = 0;
+      sim::Truth truth;
+      r = record(scenarios[v], seed, count, false, [&](sim::Sample* s) {
+        if (k >= motion.size())
+          return false;
+        const SensorTruth& m = motion[k++];
+        truth.attitude = m.attitude;
+        truth.acceleration = m.acceleration;
+        truth.angular_rate = m.angular_rate;
+        truth.angular_acceleration = m.angular_acceleration;
+        return simulator.next(truth, s);
+      });
+    }
+    simulators[v].reset();
+    use(v, r);
+  }
+  return errors;
 }
 
 sim::Scenario matchScenario(const sim::Scenario& scenario, const Recording& real)

@@ -104,6 +104,11 @@ Simulator::Simulator(const Scenario& scenario, std::uint64_t seed)
 
 bool Simulator::next(Sample* sample)
 {
+  return k_ < count_ && next(motion_.evaluate(k_), sample);
+}
+
+bool Simulator::next(const Truth& truth, Sample* sample)
+{
   if (k_ >= count_)
   {
     return false;
@@ -112,7 +117,7 @@ bool Simulator::next(Sample* sample)
   s.index = k_;
   s.elapsed = k_ / scenario_.rate;
   s.t = scenario_.start_time + s.elapsed;
-  s.truth = motion_.evaluate(k_);
+  s.truth = truth;
   s.has_temperature = scenario_.temperature.enabled;
   s.temperature = s.has_temperature ? temperatureAt(scenario_.temperature, s.elapsed) : 0.0;
 

@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <string>
+#include <vector>
 
 #include "../common/test_size.h"
 #include "periodic_bias_compensation/gap/gap.h"
@@ -182,4 +183,36 @@ TEST(GapMotion, AMotionTheScenarioCannotTakeIsLeftOutAndTheNoiseStillNamed)
   const gap::Report plain = gap::diagnose(rigRecording(false, 21), scenario, opt);
   EXPECT_TRUE(plain.motion.unexplained) << gap::reportSummary(plain);
   EXPECT_LT(plain.confidence, 0.5) << gap::reportSummary(plain);
+}
+
+TEST(GapSimulate, VariantsOnOneMotionAreTheRecordingsSimulatedAlone)
+{
+  // Sensors that read the motion's angular acceleration (a lever arm), lose samples and jitter
+  // their stamps, and one that cannot be simulated, on one evaluation of a moored sea's motion.
+  const sim::Scenario sea = mooredSea(1.5, 8.0);
+  std::vector<sim::Scenario> variants(4, sea);
+  variants[1].effects.push_back({ "lever_arm", true, { { "offset", { 2.0, -1.0, 3.0 } } } });
+  variants[2].effects.push_back({ "dropouts", true, { { "probability", { 0.01 } }, { "burst_length", { 3.0 } } } });
+  variants[2].effects.push_back({ "timestamp_jitter", true, { { "sigma", { 2e-3 } } } });
+  variants[3].effects.push_back({ "scale_factor", true, { { "accel", { 0.9, 0.0, 0.0 } } } });  // beyond +-0.5
+  std::vector<int> made;
+  const std::vector<std::string> errors = gap::simulateVariants(variants, 21, [&](int v, gap::Recording& r) {
+    made.push_back(v);
+    const gap::Recording alone = gap::simulateRecording(variants[v], 21);
+    ASSERT_EQ(r.size(), alone.size()) << "variant " << v;
+    EXPECT_EQ(r.stamp, alone.stamp) << "variant " << v;
+    EXPECT_TRUE(r.data == alone.data) << "variant " << v;
+    for (std::size_t k = 0; k < r.size(); ++k)
+    {
+      ASSERT_TRUE(r.orientation[k].coeffs() == alone.orientation[k].coeffs()) << "variant " << v << " sample " << k;
+    }
+  });
+  EXPECT_EQ(made, (std::vector<int>{ 0, 1, 2 }));
+  ASSERT_EQ(errors.size(), 4u);
+  EXPECT_EQ(errors[0] + errors[1] + errors[2], "");
+  EXPECT_NE(errors[3].find("0.9 outside [-0.5, 0.5]"), std::string::npos) << errors[3];
+  // The lever arm moves the recording: the variants are not the same sensor.
+  gap::Recording plain = gap::simulateRecording(variants[0], 21);
+  gap::Recording lever = gap::simulateRecording(variants[1], 21);
+  EXPECT_GT((plain.data - lever.data).cwiseAbs().maxCoeff(), 1e-3);
 }

@@ -4,6 +4,7 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -65,6 +66,14 @@ Recording sliceFraction(const Recording& recording, double from, double to);
 /// Runs the simulator and keeps what a real sensor would give (dropped samples removed), and with
 /// keep_truth its truth (as ground_truth/odometry carries it) at every kept sample.
 Recording simulateRecording(const sim::Scenario& scenario, std::uint64_t seed, bool keep_truth = false);
+
+/// simulateRecording (without truth) of scenarios that differ only in their effects, on one seed,
+/// the motion evaluated once for all: each recording is handed to `use` (variant index, recording)
+/// as soon as it is made, and is the one simulateRecording would give. A variant whose scenario
+/// cannot be simulated is skipped and its error returned.
+/// @return per variant, the error that kept it from being simulated ("" when it was)
+std::vector<std::string> simulateVariants(const std::vector<sim::Scenario>& scenarios, std::uint64_t seed,
+                                          const std::function<void(int, Recording&)>& use);
 
 /// A scenario made to match a recording: same rate, duration and start time.
 sim::Scenario matchScenario(const sim::Scenario& scenario, const Recording& real);

@@ -81,6 +81,16 @@ public:
   /// @return false when the scenario is over (sample untouched)
   bool next(Sample* sample);
 
+  /// Produces the next sample on a motion evaluated elsewhere, which one evaluation then serves
+  /// for several sensors: `truth` is the next sample's truth of a Simulator whose scenario
+  /// differs from this one's only in its effects, on the same seed. The sample is then the one
+  /// next(Sample*) would give. Only the truth's attitude, acceleration, angular rate and angular
+  /// acceleration reach the sensor.
+  /// @param truth the motion at this simulator's next sample
+  /// @param sample output (also filled for dropped samples, with dropped = true; its truth is `truth`)
+  /// @return false when the scenario is over (sample untouched)
+  bool next(const Truth& truth, Sample* sample);
+
   /// Total number of samples.
   std::int64_t sampleCount() const
   {
