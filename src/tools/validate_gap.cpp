@@ -5,7 +5,7 @@
 // withheld effect check that no confident verdict is given.
 //
 //   validate_gap [--small] [--seeds N] [--duration S] [--rate HZ] [--md FILE] [--json FILE] [--quiet]
-//                [--effect NAME] [--motion static|sinusoids|sea|sea-foreign|hull-foreign|buoy-replay] [--verbose]
+//                [--effect NAME] [--motion static|sinusoids|sea|sea-other-noise|hull-foreign|buoy-replay] [--verbose]
 //                [--bench-hours H] [--buoy CSV --buoy-scenario YAML]
 //
 // --md and --json are renamed into place when complete (tools/output_file.h).
@@ -20,6 +20,7 @@
 #include <map>
 #include <optional>
 #include <random>
+#include <set>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -687,14 +688,14 @@ struct Grid
 Grid caseGrid(const Options& opt)
 {
   // "hull-foreign": a hull in a sea of hullMotion() (not the simulator's), against the sea scenario.
-  // "sea-foreign": the same sea, but "real" is written by foreignRecording() (another noise
-  // generator, other motion details), for the effects it knows.
+  // "sea-other-noise": the simulator's sea model, but "real" is written by foreignRecording()
+  // (another noise generator, other wave components), for the effects it knows.
   // "buoy-replay": the recorded buoy's motion under simulated effects, against its plausible
   // scenario (only with --buoy).
-  Grid grid = { { "static", "sinusoids", "sea", "sea-foreign", "hull-foreign" }, { 1.0, 0.3 }, opt.seeds };
+  Grid grid = { { "static", "sinusoids", "sea", "sea-other-noise", "hull-foreign" }, { 1.0, 0.3 }, opt.seeds };
   if (opt.small)
   {
-    grid.motions = { "sinusoids", "sea-foreign", "hull-foreign" };
+    grid.motions = { "sinusoids", "sea-other-noise", "hull-foreign" };
     grid.sizes = { 1.0 };
     grid.seeds = 1;
   }
@@ -709,16 +710,17 @@ Grid caseGrid(const Options& opt)
   return grid;
 }
 
-/// Whether foreignRecording() writes the "real" recording of a motion ("sea-foreign", "hull-foreign").
-bool isForeign(const std::string& motion)
-{
-  return motion.size() > 8 && motion.substr(motion.size() - 8) == "-foreign";
-}
-
 /// Whether the motion is hullMotion()'s ("hull-foreign"; its scenario is the sea's).
 bool isHull(const std::string& motion)
 {
   return motion.rfind("hull", 0) == 0;
+}
+
+/// Whether foreignRecording() writes the "real" recording of a motion ("sea-other-noise",
+/// "hull-foreign").
+bool isForeign(const std::string& motion)
+{
+  return motion == "sea-other-noise" || isHull(motion);
 }
 
 /// One effect at one size, run on `seeds` seeds.
@@ -896,7 +898,6 @@ std::vector<CaseResult> runCases(const Options& opt, const Grid& grid)
   std::optional<gap::Recording> buoy;
   for (const std::string& motion : grid.motions)
   {
-    const bool foreign = isForeign(motion);
     sim::Scenario base;
     if (motion == "buoy-replay")
     {
@@ -916,7 +917,7 @@ std::vector<CaseResult> runCases(const Options& opt, const Grid& grid)
     }
     else
     {
-      base = baseScenario(foreign ? motion.substr(0, motion.size() - 8) : motion, opt.rate, opt.duration);
+      base = baseScenario(motion.substr(0, motion.find('-')), opt.rate, opt.duration);
     }
     for (const auto& [effect, k, seeds] : motionCases(motion, opt.small, grid.sizes, grid.seeds))
     {
@@ -1219,6 +1220,11 @@ int main(int argc, char** argv)
       return 0;
     if (opt.buoy.empty() != opt.buoy_scenario.empty())
       throw pbc::UsageError("--buoy and --buoy-scenario go together");
+    const std::set<std::string> motions = { "static",          "sinusoids",    "sea",
+                                            "sea-other-noise", "hull-foreign", "buoy-replay" };
+    if (!opt.only_motion.empty() && motions.count(opt.only_motion) == 0)
+      throw pbc::UsageError("unknown --motion '" + opt.only_motion +
+                            "' (static, sinusoids, sea, sea-other-noise, hull-foreign, buoy-replay)");
     pbc::refuseOverwritingInputs({ { "--buoy", opt.buoy }, { "--buoy-scenario", opt.buoy_scenario } },
                                  { { "--md", opt.md }, { "--json", opt.json } });
   }
