@@ -9,6 +9,7 @@
 #include <future>
 #include <set>
 #include <sstream>
+#include <stdexcept>
 
 #include "periodic_bias_compensation/gap/diagnose.h"
 #include "periodic_bias_compensation/gap/signal.h"
@@ -217,22 +218,25 @@ DiagnoseContext prepare(const Recording& real_in, const sim::Scenario& scenario_
 /// features at once; the plot curves of the runs are taken on the way. `simulated`, when given
 /// and the recording has no truth: the runs of the context's scenario with its seeds, already
 /// simulated (they are taken instead of simulated again).
-void simulateBase(const DiagnoseContext& context, BaseEnsemble* base, std::vector<Recording>* simulated = nullptr)
+void simulateBase(const DiagnoseContext& context, BaseEnsemble* base, std::vector<Recording>* simulated = nullptr,
+                  bool runs_only = false)
 {
   const int runs = context.runs;
   const DiagnoseOptions& opt = context.opt;
-  const bool reuse = simulated && !context.truth && static_cast<int>(simulated->size()) == runs;
+  const bool truth = context.truth && !runs_only;
+  const bool reuse = simulated && !truth && static_cast<int>(simulated->size()) == runs;
   base->runs = reuse ? std::move(*simulated) : std::vector<Recording>(runs);
-  base->curves.resize(runs);
-  base->truth_members.resize(context.truth ? runs : 0);
-  base->truth_runs.resize(context.truth ? runs : 0);
+  base->curves.resize(runs_only ? 0 : runs);
+  base->truth_members.resize(truth ? runs : 0);
+  base->truth_runs.resize(truth ? runs : 0);
   parallelFor(runs, opt.threads, [&](int i) {
     Recording& run = base->runs[i];
     if (!reuse)
-      run = simulateRecording(context.scenario, context.seed(i), context.truth);
+      run = simulateRecording(context.scenario, context.seed(i), truth);
     run.rate = context.real.rate;
-    base->curves[i] = curvesOf(run, opt.fit_fraction, context.real.rate, context.nseg, context.allan_m);
-    if (context.truth)
+    if (!runs_only)
+      base->curves[i] = curvesOf(run, opt.fit_fraction, context.real.rate, context.nseg, context.allan_m);
+    if (truth)
     {
       const Eigen::MatrixXd res = truthResidual(run, context.scenario.gravity, opt.truth_smooth);
       base->truth_members[i] = truthFeatures(res, opt.truth_segments);
@@ -978,6 +982,34 @@ Report diagnose(const Recording& real_in, const sim::Scenario& scenario_in, cons
   verdictStage(opt, &rep);
   localise(&rep);
   plotCurves(context, base.curves, z_before, &rep);
+  rep.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
+  return rep;
+}
+
+Report diagnoseStep(const Recording& real_in, const sim::Scenario& scenario_in, const Report& first,
+                    const DiagnoseOptions& opt)
+{
+  const auto wall0 = std::chrono::steady_clock::now();
+  Report rep;
+  DiagnoseContext context = prepare(real_in, scenario_in, opt, &rep);
+  std::vector<FeatureInfo>& info = rep.layout_held.info;
+  if (info.size() != first.layout_held.info.size() || rep.samples != first.samples)
+  {
+    throw std::invalid_argument("diagnoseStep: the first diagnosis is of another recording");
+  }
+  for (std::size_t k = 0; k < info.size(); ++k)
+  {
+    info[k].left_out = first.layout_held.info[k].left_out;
+  }
+  rep.motion = first.motion;
+  rep.motion_csv = first.motion_csv;
+  BaseEnsemble base;
+  simulateBase(context, &base, nullptr, true);
+  std::vector<double> z_before;
+  std::vector<Recording> base_fit = withheldStage(context, &base, &rep, &z_before);
+  rep.direct = first.direct;
+  candidateStage(context, std::move(base_fit), &rep);
+  verdictStage(opt, &rep);
   rep.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
   return rep;
 }

@@ -521,7 +521,7 @@ Stepwise stepwiseDiagnosis(const gap::Report& rep, const gap::Recording& real, c
     model = gap::applyCandidate(model, c);
     if (k + 1 < o.steps)
     {
-      next = gap::diagnose(real, model, o.diag);
+      next = gap::diagnoseStep(real, model, rep, o.diag);
       cur = &next;
     }
   }

@@ -14,6 +14,7 @@
 #include <random>
 #include <set>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 #include <utility>
 #include <vector>
@@ -264,15 +265,21 @@ sim::Scenario sinusoidBase()
   return s;
 }
 
-TEST(GapDiagnose, NamesAWithheldVibrationAndShrinksTheGap)
+/// A vibration line at 13.7 Hz on the accelerometer's x and z.
+sim::EffectSpec vibration()
 {
-  const sim::Scenario base = sinusoidBase();
-  sim::Scenario real_s = base;
   sim::EffectSpec v{ "vibration", true, {} };
   v.params["frequency"] = { 13.7 };
   v.params["accel_amplitude"] = { 0.03, 0.0, 0.04 };
   v.params["gyro_amplitude"] = { 0.0, 0.0, 0.0 };
-  real_s.effects.push_back(v);
+  return v;
+}
+
+TEST(GapDiagnose, NamesAWithheldVibrationAndShrinksTheGap)
+{
+  const sim::Scenario base = sinusoidBase();
+  sim::Scenario real_s = base;
+  real_s.effects.push_back(vibration());
   gap::Recording real = gap::simulateRecording(real_s, 424242);
   gap::DiagnoseOptions opt;
   const gap::Report rep = gap::diagnose(real, base, opt);
@@ -292,6 +299,43 @@ TEST(GapDiagnose, NamesAWithheldVibrationAndShrinksTheGap)
   {
     EXPECT_TRUE(json.at("verdict").contains(key)) << key;
   }
+}
+
+TEST(GapDiagnose, AStepIsTheFullDiagnosisOfTheModelWhenTheMotionIsTheScenarios)
+{
+  // Two withheld effects: the first diagnosis names one; the next step, with it added, is judged
+  // as the full diagnosis of that model would judge it (the motion does not differ here, so the
+  // full one fits nothing of it either) and names the other.
+  const sim::Scenario base = sinusoidBase();
+  sim::Scenario real_s = base;
+  sim::EffectSpec b{ "constant_bias", true, {} };
+  b.params["accel"] = { 0.05, -0.03, 0.0 };
+  b.params["gyro"] = { 0.002, 0.0, 0.0 };
+  real_s.effects.push_back(vibration());
+  real_s.effects.push_back(b);
+  const gap::Recording real = gap::simulateRecording(real_s, 4343);
+  const gap::DiagnoseOptions opt;
+  const gap::Report first = gap::diagnose(real, base, opt);
+  ASSERT_FALSE(first.motion.differs) << gap::reportSummary(first);
+  ASSERT_GE(first.best, 0) << gap::reportSummary(first);
+  const sim::Scenario model = gap::applyCandidate(first.motion.fitted, first.ranking[first.best]);
+  const gap::Report step = gap::diagnoseStep(real, model, first, opt);
+  const gap::Report full = gap::diagnose(real, model, opt);
+  EXPECT_EQ(step.verdict_effect, full.verdict_effect);
+  const std::set<std::string> named = { first.verdict_effect, step.verdict_effect };
+  EXPECT_EQ(named, (std::set<std::string>{ "constant_bias", "vibration" })) << gap::reportSummary(step);
+  EXPECT_DOUBLE_EQ(step.gap_before, full.gap_before);
+  EXPECT_DOUBLE_EQ(step.confidence, full.confidence);
+  ASSERT_EQ(step.ranking.size(), full.ranking.size());
+  for (std::size_t i = 0; i < step.ranking.size(); ++i)
+  {
+    EXPECT_EQ(step.ranking[i].effect, full.ranking[i].effect) << i;
+    EXPECT_DOUBLE_EQ(step.ranking[i].shrink, full.ranking[i].shrink) << i;
+  }
+  EXPECT_TRUE(step.where.empty());  // only what a step needs is made
+  // A report of another recording is refused.
+  const gap::Recording shorter = gap::sliceFraction(real, 0.0, 0.5);
+  EXPECT_THROW(gap::diagnoseStep(shorter, model, first, opt), std::invalid_argument);
 }
 
 TEST(GapDiagnose, NamesRepeatedSamples)

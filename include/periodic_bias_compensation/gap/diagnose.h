@@ -109,6 +109,15 @@ struct Report
 /// Full diagnosis of a real recording against a scenario.
 Report diagnose(const Recording& real, const sim::Scenario& scenario, const DiagnoseOptions& options);
 
+/// A further step of a forward selection (diagnose_gap's stepwise diagnosis): the candidates and
+/// the verdict of `scenario` (the first diagnosis's fitted motion with effects added) against the
+/// same recording, the motion taken as `first` fitted it: not fitted again, its features left out
+/// where `first` left them out. Only what a step needs is made: the report's motion, gaps,
+/// ranking, best, verdict and confidence; no compensator, truth or `where` stage, no plot curves.
+/// @throws std::invalid_argument when `first` is not a diagnosis of this recording
+Report diagnoseStep(const Recording& real, const sim::Scenario& scenario, const Report& first,
+                    const DiagnoseOptions& options);
+
 /// The scenario with a candidate's effects in place of those of the same name.
 sim::Scenario applyCandidate(const sim::Scenario& scenario, const Candidate& candidate);
 
