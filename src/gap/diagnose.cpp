@@ -217,7 +217,8 @@ DiagnoseContext prepare(const Recording& real_in, const sim::Scenario& scenario_
 /// run's residual against its own truth (then dropped: it is large) is reduced to the truth
 /// features at once; the plot curves of the runs are taken on the way. `simulated`, when given
 /// and the recording has no truth: the runs of the context's scenario with its seeds, already
-/// simulated (they are taken instead of simulated again).
+/// simulated (they are taken instead of simulated again). `runs_only` (a stepwise step): the runs
+/// alone, without their plot curves and truth features.
 void simulateBase(const DiagnoseContext& context, BaseEnsemble* base, std::vector<Recording>* simulated = nullptr,
                   bool runs_only = false)
 {
@@ -622,7 +623,7 @@ void judge(const DiagnoseContext& context, const Report& rep, std::vector<Candid
     });
     if (i == 0)
     {
-      errors = failed;
+      errors = failed;  // the same on every seed: a candidate's scenario is refused when built
     }
   });
   for (int c = 0; c < nc; ++c)
