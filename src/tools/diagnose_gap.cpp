@@ -521,8 +521,12 @@ Stepwise stepwiseDiagnosis(const gap::Report& rep, const gap::Recording& real, c
     model = gap::applyCandidate(model, c);
     if (k + 1 < o.steps)
     {
+      std::fprintf(stderr, "diagnose_gap: step %d of at most %d: %s added, judging the candidates again\n", k + 2,
+                   o.steps, c.effect.c_str());
       next = gap::diagnoseStep(real, model, rep, o.diag);
       cur = &next;
+      std::fprintf(stderr, "diagnose_gap: step %d: verdict %s, withheld gap %.3g (%.1f s)\n", k + 2,
+                   cur->verdict_effect.c_str(), cur->gap_before, cur->seconds);
     }
   }
   return result;
@@ -662,7 +666,12 @@ int main(int argc, char** argv)
   try
   {
     normalise(&real, o.max_duration);
+    std::fprintf(stderr, "diagnose_gap: %zu samples (%.0f s) against '%s', ensemble %d: diagnosing\n", real.size(),
+                 real.size() > 1 ? real.stamp.back() - real.stamp.front() : 0.0, scenario.name.c_str(),
+                 o.diag.ensemble);
     const gap::Report rep = gap::diagnose(real, scenario, o.diag);
+    std::fprintf(stderr, "diagnose_gap: step 1: verdict %s, withheld gap %.3g (%.1f s)\n", rep.verdict_effect.c_str(),
+                 rep.gap_before, rep.seconds);
     const Stepwise s = stepwiseDiagnosis(rep, real, scenario, o);
     writeReport(rep, s, o);
     std::cout << gap::reportSummary(rep) << stepwiseLine(s.steps) << "\nreport: " << o.out << "/report.md, " << o.out

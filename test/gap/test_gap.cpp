@@ -456,6 +456,9 @@ TEST(GapTool, DiagnosesASimulatedBagAndACsv)
             "/bag --no-plots");
   ASSERT_EQ(r.status, 0) << r.output;
   EXPECT_NE(r.output.find("VERDICT: quantization"), std::string::npos) << r.output;
+  // progress on stderr, one line per diagnosis of the stepwise search
+  EXPECT_NE(r.output.find("diagnose_gap: step 1: verdict quantization"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("diagnose_gap: step 2 of at most 5: quantization added"), std::string::npos) << r.output;
   const nlohmann::json json = nlohmann::json::parse(readAll(dir + "/bag/report.json"));
   EXPECT_EQ(json.at("verdict").at("effect"), "quantization") << json.dump(2);
   EXPECT_TRUE(fs::exists(dir + "/bag/report.md"));
