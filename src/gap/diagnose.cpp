@@ -258,13 +258,25 @@ std::vector<std::vector<double>> heldMembers(const DiagnoseContext& context, con
   return members;
 }
 
-/// The median over an ensemble's members of the gap of one member against the rest.
-double typicalNullGap(const std::vector<std::vector<double>>& members, const FeatureLayout& layout)
+/// The null z-scores of an ensemble: each member against the rest.
+std::vector<std::vector<double>> nullZ(const std::vector<std::vector<double>>& members, const FeatureLayout& layout)
 {
-  std::vector<double> gaps;
+  std::vector<std::vector<double>> z;
   for (int i = 0; i < static_cast<int>(members.size()); ++i)
   {
-    gaps.push_back(gapOf(leaveOneOutZ(members, i, layout)));
+    z.push_back(leaveOneOutZ(members, i, layout));
+  }
+  return z;
+}
+
+/// The median of the gaps of some z-score vectors (0 when there are none): of nullZ, the typical
+/// null gap.
+double medianGap(const std::vector<std::vector<double>>& zs)
+{
+  std::vector<double> gaps;
+  for (const std::vector<double>& z : zs)
+  {
+    gaps.push_back(gapOf(z));
   }
   std::sort(gaps.begin(), gaps.end());
   return gaps.empty() ? 0.0 : gaps[gaps.size() / 2];
@@ -300,18 +312,18 @@ bool motionShape(const FeatureInfo& f, bool moving)
 /// With the motion left unexplained (kMotionUnexplained), leaves out of the sensor diagnosis every
 /// withheld feature of its shape (motionShape; `moving`: the scenario is not at rest) that a
 /// motion candidate moves (reach: by more than kMovedSpreads of the given ensemble's spreads) and
-/// that still departs from the fitted ensemble (`members`) by more than kZThreshold: the motion
-/// reaches it and could not fit it. Marks them in the report's layout.
-void leaveOutMotion(const std::vector<std::vector<double>>& members, const std::vector<double>& reach, bool moving,
-                    Report* rep)
+/// that still departs from the fitted ensemble (`members`; the recording's z-scores against it:
+/// `z`) by more than kZThreshold: the motion reaches it and could not fit it. Marks them in the
+/// report's layout.
+void leaveOutMotion(const std::vector<std::vector<double>>& members, const std::vector<double>& z,
+                    const std::vector<double>& reach, bool moving, Report* rep)
 {
-  const double null_gap = typicalNullGap(members, rep->layout_held);
+  const double null_gap = medianGap(nullZ(members, rep->layout_held));
   rep->motion.unexplained = rep->motion.gap_after > kMotionUnexplained * null_gap;
   if (!rep->motion.unexplained)
   {
     return;
   }
-  const std::vector<double> z = zScores(rep->real_held, ensembleStats(members, rep->layout_held));
   for (std::size_t k = 0; k < z.size(); ++k)
   {
     FeatureInfo& f = rep->layout_held.info[k];
@@ -460,8 +472,9 @@ void motionStage(DiagnoseContext* context, BaseEnsemble* base, Report* rep)
     best_summaries.reset();
   }
   rep->motion_csv = motionCsv(rep->motion, adopted_summaries());
-  rep->motion.gap_after = gapOf(zScores(rep->real_held, ensembleStats(best_members, rep->layout_held)));
-  leaveOutMotion(best_members, reach, context->scenario.motion.type != sim::MotionType::kStatic, rep);
+  const std::vector<double> z_after = zScores(rep->real_held, ensembleStats(best_members, rep->layout_held));
+  rep->motion.gap_after = gapOf(z_after);
+  leaveOutMotion(best_members, z_after, reach, context->scenario.motion.type != sim::MotionType::kStatic, rep);
   if (!rep->motion.adopted.empty())
   {
     context->scenario = rep->motion.fitted;
@@ -544,21 +557,16 @@ std::vector<Recording> withheldStage(const DiagnoseContext& context, BaseEnsembl
   {
     rep->motion.gap_before = rep->motion.gap_after = rep->gap_before;
   }
-  std::vector<double> null_gaps;
-  rep->null_z_held.clear();
-  for (int i = 0; i < runs; ++i)
+  rep->null_z_held = nullZ(rep->ens_held_members, rep->layout_held);
+  for (const std::vector<double>& zn : rep->null_z_held)
   {
-    rep->null_z_held.push_back(leaveOneOutZ(rep->ens_held_members, i, rep->layout_held));
-    const std::vector<double>& zn = rep->null_z_held.back();
     rep->null_gap_held = std::max(rep->null_gap_held, gapOf(zn));
-    null_gaps.push_back(gapOf(zn));
     for (double v : zn)
     {
       rep->null_max_z_held = std::max(rep->null_max_z_held, std::abs(v));
     }
   }
-  std::sort(null_gaps.begin(), null_gaps.end());
-  rep->null_gap_typical = null_gaps[null_gaps.size() / 2];
+  rep->null_gap_typical = medianGap(rep->null_z_held);
   for (double v : *z_before)
   {
     rep->max_z_held = std::max(rep->max_z_held, std::abs(v));
@@ -993,15 +1001,11 @@ Report diagnoseStep(const Recording& real_in, const sim::Scenario& scenario_in, 
   const auto wall0 = std::chrono::steady_clock::now();
   Report rep;
   DiagnoseContext context = prepare(real_in, scenario_in, opt, &rep);
-  std::vector<FeatureInfo>& info = rep.layout_held.info;
-  if (info.size() != first.layout_held.info.size() || rep.samples != first.samples)
+  if (rep.layout_held.info.size() != first.layout_held.info.size() || rep.samples != first.samples)
   {
     throw std::invalid_argument("diagnoseStep: the first diagnosis is of another recording");
   }
-  for (std::size_t k = 0; k < info.size(); ++k)
-  {
-    info[k].left_out = first.layout_held.info[k].left_out;
-  }
+  rep.layout_held = first.layout_held;  // the same recording's, with the features left out
   rep.motion = first.motion;
   rep.motion_csv = first.motion_csv;
   BaseEnsemble base;

@@ -20,7 +20,6 @@
 #include <map>
 #include <optional>
 #include <random>
-#include <set>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -685,6 +684,10 @@ struct Grid
   int seeds = 0;
 };
 
+/// Every motion of the full form, in its order ("buoy-replay" only with --buoy).
+const std::vector<std::string> kMotions = { "static",          "sinusoids",    "sea",
+                                            "sea-other-noise", "hull-foreign", "buoy-replay" };
+
 Grid caseGrid(const Options& opt)
 {
   // "hull-foreign": a hull in a sea of hullMotion() (not the simulator's), against the sea scenario.
@@ -692,7 +695,7 @@ Grid caseGrid(const Options& opt)
   // (another noise generator, other wave components), for the effects it knows.
   // "buoy-replay": the recorded buoy's motion under simulated effects, against its plausible
   // scenario (only with --buoy).
-  Grid grid = { { "static", "sinusoids", "sea", "sea-other-noise", "hull-foreign" }, { 1.0, 0.3 }, opt.seeds };
+  Grid grid = { { kMotions.begin(), kMotions.end() - 1 }, { 1.0, 0.3 }, opt.seeds };
   if (opt.small)
   {
     grid.motions = { "sinusoids", "sea-other-noise", "hull-foreign" };
@@ -1220,11 +1223,13 @@ int main(int argc, char** argv)
       return 0;
     if (opt.buoy.empty() != opt.buoy_scenario.empty())
       throw pbc::UsageError("--buoy and --buoy-scenario go together");
-    const std::set<std::string> motions = { "static",          "sinusoids",    "sea",
-                                            "sea-other-noise", "hull-foreign", "buoy-replay" };
-    if (!opt.only_motion.empty() && motions.count(opt.only_motion) == 0)
-      throw pbc::UsageError("unknown --motion '" + opt.only_motion +
-                            "' (static, sinusoids, sea, sea-other-noise, hull-foreign, buoy-replay)");
+    if (!opt.only_motion.empty() && std::find(kMotions.begin(), kMotions.end(), opt.only_motion) == kMotions.end())
+    {
+      std::string known;
+      for (const std::string& m : kMotions)
+        known += (known.empty() ? "" : ", ") + m;
+      throw pbc::UsageError("unknown --motion '" + opt.only_motion + "' (" + known + ")");
+    }
     pbc::refuseOverwritingInputs({ { "--buoy", opt.buoy }, { "--buoy-scenario", opt.buoy_scenario } },
                                  { { "--md", opt.md }, { "--json", opt.json } });
   }
