@@ -417,8 +417,9 @@ void sinusoidFit(const Recording& r, int c, double f, double t0, double* amplitu
   const double m = r.data.col(c).mean();
   for (std::size_t i = 0; i < r.size(); ++i)
   {
-    const double th = 2.0 * M_PI * f * (r.stamp[i] - t0);
-    const double s = std::sin(th), co = std::cos(th);
+    const double turns = f * (r.stamp[i] - t0);
+    double s, co;
+    sinCosTurn(turns - std::floor(turns), &s, &co);
     ss += s * s;
     sc += s * co;
     cc += co * co;

@@ -722,7 +722,8 @@ Recording record(const sim::Scenario& scenario, std::uint64_t seed, std::int64_t
 
 Recording simulateRecording(const sim::Scenario& scenario, std::uint64_t seed, bool keep_truth)
 {
-  sim::Simulator simulator(scenario, seed);
+  sim::Simulator simulator(scenario, seed,
+                           keep_truth ? sim::ShipMotion::Outputs::kAll : sim::ShipMotion::Outputs::kSensor);
   return record(scenario, seed, simulator.sampleCount(), keep_truth,
                 [&simulator](sim::Sample* s) { return simulator.next(s); });
 }
@@ -737,7 +738,7 @@ std::vector<std::string> simulateVariants(const std::vector<sim::Scenario>& scen
   {
     try
     {
-      simulators[v] = std::make_unique<sim::Simulator>(scenarios[v], seed);
+      simulators[v] = std::make_unique<sim::Simulator>(scenarios[v], seed, sim::ShipMotion::Outputs::kSensor);
     }
     catch (const std::exception& e)
     {

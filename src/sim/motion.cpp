@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 
 #include "periodic_bias_compensation/common/numeric.h"
@@ -48,16 +49,16 @@ SlowMotion::SlowMotion(const Motion& motion)
 {
   const double inf = std::numeric_limits<double>::infinity();
   const double speed0 = motion.type == MotionType::kStatic ? 0.0 : motion.speed;
-  Segment current{ 0.0, inf, motion.position, motion.heading, speed0, 0.0, 0.0 };
+  Segment current{ 0.0, inf, motion.position, motion.heading, speed0, 0.0, 0.0, Vector3::Zero() };
   if (motion.type != MotionType::kRoute || motion.route.legs.empty())
   {
-    segments_.push_back(current);
+    push(current);
     return;
   }
   double t = 0.0;
   auto add = [&](double duration, double turn_rate, double acceleration) {
-    const Segment s{ t, t + duration, current.position, current.heading, current.speed, turn_rate, acceleration };
-    segments_.push_back(s);
+    push({ t, t + duration, current.position, current.heading, current.speed, turn_rate, acceleration,
+           Vector3::Zero() });
     const SlowState end = at(t + duration);
     current.position = end.position;
     current.heading = end.heading;
@@ -81,6 +82,12 @@ SlowMotion::SlowMotion(const Motion& motion)
     add(leg.duration, 0.0, 0.0);
   }
   segments_.back().end = inf;
+}
+
+void SlowMotion::push(Segment segment)
+{
+  segment.direction = Vector3(std::cos(segment.heading), std::sin(segment.heading), 0.0);
+  segments_.push_back(segment);
 }
 
 std::size_t SlowMotion::segmentAt(double elapsed) const
@@ -118,7 +125,7 @@ SlowState SlowMotion::at(double elapsed) const
     out.acceleration = v * r * Vector3(-std::sin(psi), std::cos(psi), 0.0);
     return out;
   }
-  const Vector3 h(std::cos(s.heading), std::sin(s.heading), 0.0);
+  const Vector3& h = s.direction;
   out.heading = wrapAngle(s.heading);
   out.position = s.position + (s.speed * tau + 0.5 * s.acceleration * tau * tau) * h;
   out.velocity = (s.speed + s.acceleration * tau) * h;
@@ -183,8 +190,12 @@ double encounterFrequency(double omega, double speed, double mu, double gravity)
   return omega - omega * omega * speed * std::cos(mu) / gravity;
 }
 
-ShipMotion::ShipMotion(const Scenario& scenario, std::uint64_t seed)
-  : motion_(scenario.motion), dt_(1.0 / scenario.rate), gravity_(scenario.gravity), slow_(scenario.motion)
+ShipMotion::ShipMotion(const Scenario& scenario, std::uint64_t seed, Outputs outputs)
+  : motion_(scenario.motion),
+    dt_(1.0 / scenario.rate),
+    gravity_(scenario.gravity),
+    slow_(scenario.motion),
+    outputs_(outputs)
 {
   const bool has_sea = motion_.type == MotionType::kSea || motion_.type == MotionType::kRoute;
   if (has_sea)
@@ -239,6 +250,142 @@ ShipMotion::Dofs ShipMotion::seaDofsDirect(double elapsed, const SlowState& slow
   return d;
 }
 
+namespace
+{
+// The steady-segment synthesis runs over the components four at a time. Its lanes are written
+// out (GCC's vector types), so every instruction set computes the same sums in the same order:
+// the AVX clone, where the processor has it, gives the samples of the plain one bit for bit (it
+// has no fused multiply-add to round differently).
+using Lanes = double __attribute__((vector_size(32)));
+constexpr int kLanes = 4;
+
+// The functions below inline every one taking or giving a Lanes: no call passes one, whose ABI
+// would differ with AVX.
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wpsabi"
+inline __attribute__((always_inline)) Lanes load(const double* p)
+{
+  Lanes v;
+  std::memcpy(&v, p, sizeof v);
+  return v;
+}
+
+inline __attribute__((always_inline)) void store(double* p, Lanes v)
+{
+  std::memcpy(p, &v, sizeof v);
+}
+
+inline __attribute__((always_inline)) double sumOf(Lanes v)
+{
+  return (v[0] + v[1]) + (v[2] + v[3]);
+}
+
+/// What the synthesis of a block reads and writes.
+struct SeaPass
+{
+  const double* coeff;   ///< per group: its rows' coefficients, four lanes each
+  double* phasor;        ///< per group: sin, cos, step cos, step sin, four lanes each
+  const int* slot;       ///< the Dof slot (3 dof + order) of each row
+  std::int64_t groups;   ///< components / 4, rounded up
+  std::int64_t samples;  ///< block length
+  double* out;           ///< 18 x samples, column-major, zeroed
+};
+
+/// Rotates a group's phasors one sample on.
+inline __attribute__((always_inline)) void rotate(double* ph, Lanes s, Lanes c)
+{
+  const Lanes step_c = load(ph + 2 * kLanes), step_s = load(ph + 3 * kLanes);
+  store(ph, s * step_c + c * step_s);
+  store(ph + kLanes, c * step_c - s * step_s);
+}
+
+/// Coherent responses: NS rows follow sin(theta) alone, then NC rows cos(theta) alone.
+template <int NS, int NC>
+inline __attribute__((always_inline)) void synthesiseSplit(const SeaPass& p)
+{
+  for (std::int64_t j = 0; j < p.samples; ++j)
+  {
+    Lanes acc[NS + NC] = {};
+    for (std::int64_t g = 0; g < p.groups; ++g)
+    {
+      double* ph = p.phasor + 4 * kLanes * g;
+      const double* co = p.coeff + (NS + NC) * kLanes * g;
+      const Lanes s = load(ph), c = load(ph + kLanes);
+#pragma GCC unroll 18
+      for (int r = 0; r < NS; ++r)
+      {
+        acc[r] += load(co + kLanes * r) * s;
+      }
+#pragma GCC unroll 18
+      for (int r = NS; r < NS + NC; ++r)
+      {
+        acc[r] += load(co + kLanes * r) * c;
+      }
+      rotate(ph, s, c);
+    }
+    for (int r = 0; r < NS + NC; ++r)
+    {
+      p.out[18 * j + p.slot[r]] = sumOf(acc[r]);
+    }
+  }
+}
+
+/// Response lags: each of the NR rows has a sin(theta) and a cos(theta) coefficient.
+template <int NR>
+inline __attribute__((always_inline)) void synthesisePaired(const SeaPass& p)
+{
+  for (std::int64_t j = 0; j < p.samples; ++j)
+  {
+    Lanes acc[NR] = {};
+    for (std::int64_t g = 0; g < p.groups; ++g)
+    {
+      double* ph = p.phasor + 4 * kLanes * g;
+      const double* co = p.coeff + 2 * NR * kLanes * g;
+      const Lanes s = load(ph), c = load(ph + kLanes);
+#pragma GCC unroll 18
+      for (int r = 0; r < NR; ++r)
+      {
+        acc[r] += load(co + 2 * kLanes * r) * s + load(co + 2 * kLanes * r + kLanes) * c;
+      }
+      rotate(ph, s, c);
+    }
+    for (int r = 0; r < NR; ++r)
+    {
+      p.out[18 * j + p.slot[r]] = sumOf(acc[r]);
+    }
+  }
+}
+
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && !defined(__SANITIZE_ADDRESS__)
+#define PBC_SEA_CLONES __attribute__((target_clones("avx", "default")))
+#else
+#define PBC_SEA_CLONES
+#endif
+
+// Rows the sensor needs (Outputs::kSensor): the translations' accelerations and the rotations'
+// angles, rates and accelerations; with every output, all 18.
+PBC_SEA_CLONES void synthesiseSensor(const SeaPass& p)
+{
+  synthesiseSplit<8, 4>(p);
+}
+
+PBC_SEA_CLONES void synthesiseAll(const SeaPass& p)
+{
+  synthesiseSplit<11, 7>(p);
+}
+
+PBC_SEA_CLONES void synthesiseSensorLagged(const SeaPass& p)
+{
+  synthesisePaired<12>(p);
+}
+
+PBC_SEA_CLONES void synthesiseAllLagged(const SeaPass& p)
+{
+  synthesisePaired<18>(p);
+}
+#pragma GCC diagnostic pop
+}  // namespace
+
 void ShipMotion::fillSeaBlock(std::int64_t k0)
 {
   const double t0 = k0 * dt_;
@@ -261,98 +408,98 @@ void ShipMotion::fillSeaBlock(std::int64_t k0)
     }
     return;
   }
-  // Constant velocity and heading: the phases advance linearly, so rotate phasors and get
-  // all DOFs with two matrix products (rows that follow sin(theta) and rows that follow cos).
+  // Constant velocity and heading: the phases advance linearly, so each component's phasor is
+  // rotated by a fixed step and every Dof row is a weighted sum of the phasors' sines and cosines.
   const SlowState slow = slow_.at(t0);
   const Vector3 rel = slow.position - motion_.position;
-  const Eigen::Index m = static_cast<Eigen::Index>(components_.size());
   if (coeff_segment_ != seg)
   {
     buildSeaCoefficients(slow);
     coeff_segment_ = seg;
   }
-  sin_.resize(m, n);
-  cos_.resize(m, n);
-  for (Eigen::Index i = 0; i < m; ++i)
+  for (std::size_t i = 0; i < components_.size(); ++i)
   {
     const WaveComponent& c = components_[i];
     const Vector3 dir(std::cos(c.direction), std::sin(c.direction), 0.0);
     const double th = c.omega * t0 - c.wavenumber * dir.dot(rel) + c.phase;
-    sin_(i, 0) = std::sin(th);
-    cos_(i, 0) = std::cos(th);
+    double* ph = phasor_.data() + 4 * kLanes * (i / kLanes) + i % kLanes;
+    ph[0] = std::sin(th);
+    ph[kLanes] = std::cos(th);
   }
-  for (Eigen::Index j = 1; j < n; ++j)
-  {
-    sin_.col(j).array() = sin_.col(j - 1).array() * step_cos_ + cos_.col(j - 1).array() * step_sin_;
-    cos_.col(j).array() = cos_.col(j - 1).array() * step_cos_ - sin_.col(j - 1).array() * step_sin_;
-  }
+  block_.setZero();
+  const SeaPass pass{
+    coeff_.data(), phasor_.data(), slot_.data(), static_cast<std::int64_t>(phasor_.size()) / (4 * kLanes), n,
+    block_.data()
+  };
+  const bool sensor = outputs_ == Outputs::kSensor;
   if (lagged_)
   {
-    block_.noalias() = sin_coeff_ * sin_;
-    block_.noalias() += cos_coeff_ * cos_;
-    return;
+    sensor ? synthesiseSensorLagged(pass) : synthesiseAllLagged(pass);
   }
-  sin_rows_.noalias() = sin_coeff_ * sin_;
-  cos_rows_.noalias() = cos_coeff_ * cos_;
-  int rs = 0;
-  int rc = 0;
-  for (int j = 0; j < 6; ++j)
+  else
   {
-    const bool cosine = j == kHeave;
-    block_.row(3 * j) = cosine ? cos_rows_.row(rc++) : sin_rows_.row(rs++);
-    block_.row(3 * j + 1) = cosine ? sin_rows_.row(rs++) : cos_rows_.row(rc++);
-    block_.row(3 * j + 2) = cosine ? cos_rows_.row(rc++) : sin_rows_.row(rs++);
+    sensor ? synthesiseSensor(pass) : synthesiseAll(pass);
   }
 }
 
 void ShipMotion::buildSeaCoefficients(const SlowState& slow)
 {
-  // Coherent responses: each Dof's rows follow sin(theta) or cos(theta) alone (11 and 7 rows).
+  // Coherent responses: each Dof's rows follow sin(theta) or cos(theta) alone, sin rows first.
   // With response lags every row 3 j + n (Dof j, derivative n) has both parts: a g0 F_n(theta +
   // lag_j) with F_0 = sin or cos, F_1 = w_e F_0', F_2 = -w_e^2 F_0, and F(x) = A sin x + B cos x
   // at x = theta + lag is (A cos lag - B sin lag) sin theta + (A sin lag + B cos lag) cos theta.
-  const Eigen::Index m = static_cast<Eigen::Index>(components_.size());
   lagged_ = motion_.sea.response_coherence < 1.0;
-  sin_coeff_ = Eigen::MatrixXd::Zero(lagged_ ? 18 : 11, m);
-  cos_coeff_ = Eigen::MatrixXd::Zero(lagged_ ? 18 : 7, m);
-  step_cos_.resize(m);
-  step_sin_.resize(m);
-  for (Eigen::Index i = 0; i < m; ++i)
+  const bool sensor = outputs_ == Outputs::kSensor;
+  // The rows made: with kSensor, a translation's acceleration only.
+  const auto made = [sensor](int j, int n) { return !sensor || j >= kRoll || n == 2; };
+  // Per row: its slot and whether it follows sin(theta) (coherent responses only).
+  std::vector<int> sin_slots, cos_slots;
+  for (int j = 0; j < 6; ++j)
+  {
+    for (int n = 0; n < 3; ++n)
+    {
+      if (made(j, n))
+      {
+        const bool follows_cos = (j == kHeave) != (n == 1);
+        (lagged_ || !follows_cos ? sin_slots : cos_slots).push_back(3 * j + n);
+      }
+    }
+  }
+  slot_ = sin_slots;
+  slot_.insert(slot_.end(), cos_slots.begin(), cos_slots.end());
+  const int rows = static_cast<int>(slot_.size());
+  const int width = lagged_ ? 2 * rows : rows;  // coefficients per component
+  const std::size_t groups = (components_.size() + kLanes - 1) / kLanes;
+  coeff_.assign(groups * width * kLanes, 0.0);
+  phasor_.assign(groups * 4 * kLanes, 0.0);
+  for (std::size_t i = 0; i < components_.size(); ++i)
   {
     const WaveComponent& c = components_[i];
     const Vector3 dir(std::cos(c.direction), std::sin(c.direction), 0.0);
     const double we = c.omega - c.wavenumber * dir.dot(slow.velocity);
-    step_cos_[i] = std::cos(we * dt_);
-    step_sin_[i] = std::sin(we * dt_);
+    double* ph = phasor_.data() + 4 * kLanes * (i / kLanes) + i % kLanes;
+    ph[2 * kLanes] = std::cos(we * dt_);
+    ph[3 * kLanes] = std::sin(we * dt_);
+    double* co = coeff_.data() + width * kLanes * (i / kLanes) + i % kLanes;
     const std::array<Gain, 6> g = gains(motion_.sea, c.wavenumber, c.direction - slow.heading);
-    int rs = 0;
-    int rc = 0;
-    for (int j = 0; j < 6; ++j)
+    for (int r = 0; r < rows; ++r)
     {
+      const int j = slot_[r] / 3, n = slot_[r] % 3;
       const double a = c.amplitude * g[j].g0;
+      // F_n = A sin + B cos of theta itself, then shifted by the response lag.
+      const double A0 = g[j].cosine ? 0.0 : 1.0, B0 = g[j].cosine ? 1.0 : 0.0;
+      const double A[3] = { A0, -we * B0, -we * we * A0 };
+      const double B[3] = { B0, we * A0, -we * we * B0 };
+      const double cl = std::cos(c.lag[j]), sl = std::sin(c.lag[j]);
+      const double on_sin = a * (A[n] * cl - B[n] * sl), on_cos = a * (A[n] * sl + B[n] * cl);
       if (lagged_)
       {
-        const double cl = std::cos(c.lag[j]), sl = std::sin(c.lag[j]);
-        const double A0 = g[j].cosine ? 0.0 : 1.0, B0 = g[j].cosine ? 1.0 : 0.0;
-        const double A[3] = { A0, -we * B0, -we * we * A0 };
-        const double B[3] = { B0, we * A0, -we * we * B0 };
-        for (int n = 0; n < 3; ++n)
-        {
-          sin_coeff_(3 * j + n, i) = a * (A[n] * cl - B[n] * sl);
-          cos_coeff_(3 * j + n, i) = a * (A[n] * sl + B[n] * cl);
-        }
-      }
-      else if (g[j].cosine)
-      {
-        cos_coeff_(rc++, i) = a;
-        sin_coeff_(rs++, i) = -a * we;
-        cos_coeff_(rc++, i) = -a * we * we;
+        co[kLanes * 2 * r] = on_sin;
+        co[kLanes * (2 * r + 1)] = on_cos;
       }
       else
       {
-        sin_coeff_(rs++, i) = a;
-        cos_coeff_(rc++, i) = a * we;
-        sin_coeff_(rs++, i) = -a * we * we;
+        co[kLanes * r] = r < static_cast<int>(sin_slots.size()) ? on_sin : on_cos;
       }
     }
   }
@@ -379,7 +526,8 @@ Truth ShipMotion::evaluate(std::int64_t k)
   Truth out;
   const double r = slow.yaw_rate;
   // The heading's rotation about z, with one sine and cosine for the three vectors it turns.
-  const double ch = std::cos(slow.heading), sh = std::sin(slow.heading);
+  double ch, sh;
+  sinCos(slow.heading, &sh, &ch);
   const auto rz = [ch, sh](const Vector3& x) {
     return Vector3(ch * x.x() - sh * x.y(), sh * x.x() + ch * x.y(), x.z());
   };
@@ -403,9 +551,10 @@ Truth ShipMotion::evaluate(std::int64_t k)
   const double th = motion_.pitch + d[12], th_d = d[13], th_dd = d[14];
   const double psi = slow.heading + d[15], psi_d = r + d[16], psi_dd = d[17];
   // Rz(psi) Ry(th) Rx(phi) from the half angles' sines and cosines; the whole angles' follow from them.
-  const double cx = std::cos(0.5 * phi), sx = std::sin(0.5 * phi);
-  const double cy = std::cos(0.5 * th), sy = std::sin(0.5 * th);
-  const double cz = std::cos(0.5 * psi), sz = std::sin(0.5 * psi);
+  double cx, sx, cy, sy, cz, sz;
+  sinCos(0.5 * phi, &sx, &cx);
+  sinCos(0.5 * th, &sy, &cy);
+  sinCos(0.5 * psi, &sz, &cz);
   out.attitude = Quaternion(cz * cy * cx + sz * sy * sx, cz * cy * sx - sz * sy * cx, cz * sy * cx + sz * cy * sx,
                             sz * cy * cx - cz * sy * sx);
   const double sp = 2.0 * sx * cx, cp = cx * cx - sx * sx, st = 2.0 * sy * cy, ct = cy * cy - sy * sy;

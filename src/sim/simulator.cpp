@@ -81,8 +81,8 @@ Scenario completed(const Scenario& scenario)
 }
 }  // namespace
 
-Simulator::Simulator(const Scenario& scenario, std::uint64_t seed)
-  : scenario_(completed(scenario)), motion_(scenario_, seed), count_(sim::sampleCount(scenario_))
+Simulator::Simulator(const Scenario& scenario, std::uint64_t seed, ShipMotion::Outputs outputs)
+  : scenario_(completed(scenario)), motion_(scenario_, seed, outputs), count_(sim::sampleCount(scenario_))
 {
   std::vector<const EffectSpec*> order;
   for (const EffectSpec& e : scenario_.effects)

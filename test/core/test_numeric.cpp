@@ -1,4 +1,5 @@
-// The shared numeric helpers: angle wrapping, the median and the in-place upper median.
+// The shared numeric helpers: angle wrapping, the median and the in-place upper median, the
+// polynomial sine and cosine.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -41,4 +42,39 @@ TEST(Numeric, UpperMedianIsTheElementOfRankHalfTheCount)
   EXPECT_LE(even[0], 3.0);
   EXPECT_LE(even[1], 3.0);
   EXPECT_DOUBLE_EQ(even[2], 3.0);
+}
+
+TEST(Numeric, SinCosTurnIsTheLibrarysToAnUlpOrTwo)
+{
+  // Every quadrant and its edges, the turn's ends and the points between.
+  double worst = 0.0;
+  for (int i = 0; i <= 400000; ++i)
+  {
+    const double u = i / 400000.0;
+    double s, c;
+    pbc::sinCosTurn(u, &s, &c);
+    const long double a = 2.0L * M_PIl * u;  // the reference in extended precision
+    worst = std::max(
+        { worst, static_cast<double>(std::abs(s - std::sin(a))), static_cast<double>(std::abs(c - std::cos(a))) });
+  }
+  EXPECT_LT(worst, 2.3e-16);  // two units in the last place of 1
+  double s, c;
+  pbc::sinCosTurn(0.0, &s, &c);
+  EXPECT_EQ(s, 0.0);
+  EXPECT_EQ(c, 1.0);
+  pbc::sinCosTurn(0.25, &s, &c);
+  EXPECT_EQ(s, 1.0);
+  EXPECT_NEAR(c, 0.0, 1e-16);
+}
+
+TEST(Numeric, SinCosOfAnyAngleIsWithinItsBound)
+{
+  for (double x = -40.0; x <= 40.0; x += 0.0137)
+  {
+    double s, c;
+    pbc::sinCos(x, &s, &c);
+    const double bound = (2.0 + std::abs(x)) * 2.3e-16;  // the turn x / 2 pi is rounded
+    EXPECT_NEAR(s, static_cast<double>(std::sin(static_cast<long double>(x))), bound) << x;
+    EXPECT_NEAR(c, static_cast<double>(std::cos(static_cast<long double>(x))), bound) << x;
+  }
 }

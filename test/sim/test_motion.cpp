@@ -362,3 +362,28 @@ TEST(Motion, IncoherentResponsesAreConsistentAndDecorrelated)
   }
   EXPECT_LT(heave_difference, 1e-9);
 }
+
+TEST(Motion, SensorOutputsAreThoseOfEveryOutput)
+{
+  // What the sensor reads is the same to the bit with Outputs::kSensor (fewer rows of the sea
+  // synthesised), on a steady course, with response lags and through a route's turns; the sea's
+  // part of position and velocity is left out on the steady parts only.
+  sim::Scenario lagged = seaScenario(50.0, 120.0);
+  lagged.motion.sea.response_coherence = 0.4;
+  for (const sim::Scenario& s : { seaScenario(50.0, 120.0), lagged, routeScenario(60.0) })
+  {
+    sim::ShipMotion all(s, 4), sensor(s, 4, sim::ShipMotion::Outputs::kSensor);
+    int zero_wave = 0;
+    for (std::int64_t k = 0; k < sim::sampleCount(s); ++k)
+    {
+      const sim::Truth a = all.evaluate(k), b = sensor.evaluate(k);
+      ASSERT_EQ(a.acceleration, b.acceleration) << k;
+      ASSERT_EQ(a.angular_rate, b.angular_rate) << k;
+      ASSERT_EQ(a.angular_acceleration, b.angular_acceleration) << k;
+      ASSERT_EQ(a.attitude.coeffs(), b.attitude.coeffs()) << k;
+      ASSERT_EQ(a.slow_position, b.slow_position) << k;
+      zero_wave += b.wave_position.isZero(0.0) && b.wave_velocity.isZero(0.0);
+    }
+    EXPECT_GT(zero_wave, sim::sampleCount(s) / 4) << s.name;
+  }
+}

@@ -54,7 +54,9 @@ private:
     double speed;         ///< at start [m/s]
     double turn_rate;     ///< [rad/s]
     double acceleration;  ///< along track [m/s^2]
+    Vector3 direction;    ///< of the heading at start (ENU unit vector)
   };
+  void push(Segment segment);
   std::vector<Segment> segments_;
 };
 
@@ -95,9 +97,19 @@ double encounterFrequency(double omega, double speed, double mu, double gravity)
 class ShipMotion
 {
 public:
+  /// What evaluate() fills.
+  enum class Outputs
+  {
+    kAll,     ///< every field of the truth
+    kSensor,  ///< what an IMU senses (Simulator::next(const Truth&, Sample*)): attitude, angular rate and
+              ///< acceleration, acceleration; on a steady course the sea's part of position and velocity
+              ///< is left zero (wave_position, wave_velocity)
+  };
+
   /// @param scenario motion, rate and gravity are used
   /// @param seed seed of the sea's random components [-]
-  ShipMotion(const Scenario& scenario, std::uint64_t seed);
+  /// @param outputs what evaluate() fills
+  ShipMotion(const Scenario& scenario, std::uint64_t seed, Outputs outputs = Outputs::kAll);
 
   /// Truth at sample k (time k / rate). Fastest when called with k = 0, 1, 2, ...
   /// @param k sample index [-]
@@ -122,20 +134,16 @@ private:
   double gravity_;
   SlowMotion slow_;
   std::vector<WaveComponent> components_;
+  Outputs outputs_;
   Eigen::MatrixXd block_;  ///< 18 x n sea DOFs of the cached block
   std::int64_t block_start_ = -1;
-  // Steady-segment fast path: per-component coefficients of the rows that follow sin(theta)
-  // (11) and cos(theta) (7), phasor steps, and the block's phasors and products. With response
-  // lags every row has both parts: 18 rows each (lagged_).
+  // Steady-segment fast path, components in groups of four: each row's coefficients on the
+  // phasors' sines (and, with response lags, cosines), the Dof slot of each row, and per group
+  // the phasors and their steps.
   std::size_t coeff_segment_ = static_cast<std::size_t>(-1);
   bool lagged_ = false;
-  Eigen::MatrixXd sin_coeff_;
-  Eigen::MatrixXd cos_coeff_;
-  Eigen::ArrayXd step_cos_;
-  Eigen::ArrayXd step_sin_;
-  Eigen::MatrixXd sin_;
-  Eigen::MatrixXd cos_;
-  Eigen::MatrixXd sin_rows_;
-  Eigen::MatrixXd cos_rows_;
+  std::vector<double> coeff_;
+  std::vector<int> slot_;
+  std::vector<double> phasor_;
 };
 }  // namespace periodic_bias_compensation::sim

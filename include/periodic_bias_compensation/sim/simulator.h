@@ -73,8 +73,9 @@ class Simulator
 public:
   /// @param scenario scenario (validated here)
   /// @param seed seed of every random stream [-]
+  /// @param outputs what of the truth the samples carry (kSensor: what the sensor reads, faster)
   /// @throws std::runtime_error on an invalid scenario
-  Simulator(const Scenario& scenario, std::uint64_t seed);
+  Simulator(const Scenario& scenario, std::uint64_t seed, ShipMotion::Outputs outputs = ShipMotion::Outputs::kAll);
 
   /// Produces the next sample.
   /// @param sample output (also filled for dropped samples, with dropped = true)
