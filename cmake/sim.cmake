@@ -30,6 +30,7 @@ if(CATKIN_ENABLE_TESTING)
     test/sim/test_effects.cpp
     test/sim/test_motion.cpp
     test/sim/test_determinism.cpp
+    test/sim/test_random.cpp
     test/sim/test_shipped_scenarios.cpp)
   target_link_libraries(test_sim ${PROJECT_NAME}_sim)
   target_compile_definitions(test_sim PRIVATE

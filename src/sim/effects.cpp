@@ -299,7 +299,7 @@ public:
   BiasRandomWalk(const EffectSpec& spec, std::uint64_t seed, double rate)
     : accel_step_(vec3(spec, "accel_density") / std::sqrt(rate)),
       gyro_step_(vec3(spec, "gyro_density") / std::sqrt(rate)),
-      rng_(seed)
+      noise_(seed)
   {
   }
   void apply(const EffectInput&, ImuOutput& out) override
@@ -308,15 +308,15 @@ public:
     out.gyro += gyro_bias_;
     for (int i = 0; i < 3; ++i)
     {
-      accel_bias_[i] += accel_step_[i] * rng_.normal();
-      gyro_bias_[i] += gyro_step_[i] * rng_.normal();
+      accel_bias_[i] += accel_step_[i] * noise_.next();
+      gyro_bias_[i] += gyro_step_[i] * noise_.next();
     }
   }
 
 private:
   Vector3 accel_step_;
   Vector3 gyro_step_;
-  Rng rng_;
+  NormalStream noise_;
   Vector3 accel_bias_ = Vector3::Zero();
   Vector3 gyro_bias_ = Vector3::Zero();
 };
@@ -329,12 +329,12 @@ public:
       gyro_sigma_(vec3(spec, "gyro_sigma")),
       phi_(std::exp(-1.0 / (rate * num(spec, "correlation_time")))),
       drive_(std::sqrt(1.0 - phi_ * phi_)),
-      rng_(seed)
+      noise_(seed)
   {
     for (int i = 0; i < 3; ++i)
     {
-      accel_bias_[i] = accel_sigma_[i] * rng_.normal();
-      gyro_bias_[i] = gyro_sigma_[i] * rng_.normal();
+      accel_bias_[i] = accel_sigma_[i] * noise_.next();
+      gyro_bias_[i] = gyro_sigma_[i] * noise_.next();
     }
   }
   void apply(const EffectInput&, ImuOutput& out) override
@@ -343,8 +343,8 @@ public:
     out.gyro += gyro_bias_;
     for (int i = 0; i < 3; ++i)
     {
-      accel_bias_[i] = phi_ * accel_bias_[i] + drive_ * accel_sigma_[i] * rng_.normal();
-      gyro_bias_[i] = phi_ * gyro_bias_[i] + drive_ * gyro_sigma_[i] * rng_.normal();
+      accel_bias_[i] = phi_ * accel_bias_[i] + drive_ * accel_sigma_[i] * noise_.next();
+      gyro_bias_[i] = phi_ * gyro_bias_[i] + drive_ * gyro_sigma_[i] * noise_.next();
     }
   }
 
@@ -353,7 +353,7 @@ private:
   Vector3 gyro_sigma_;
   double phi_;
   double drive_;
-  Rng rng_;
+  NormalStream noise_;
   Vector3 accel_bias_ = Vector3::Zero();
   Vector3 gyro_bias_ = Vector3::Zero();
 };
@@ -361,7 +361,7 @@ private:
 class Vibration : public Effect
 {
 public:
-  Vibration(const EffectSpec& spec, std::uint64_t seed, double rate) : rng_(seed)
+  Vibration(const EffectSpec& spec, std::uint64_t seed, double rate) : noise_(seed)
   {
     const std::vector<double>& f = param(spec, "frequency");
     const std::size_t n = f.size();
@@ -386,7 +386,7 @@ public:
       out.gyro += s * line.gyro;
       if (line.phase_step > 0.0)
       {
-        line.phase += line.phase_step * rng_.normal();
+        line.phase += line.phase_step * noise_.next();
       }
     }
   }
@@ -418,7 +418,7 @@ private:
   }
 
   std::vector<Line> lines_;
-  Rng rng_;
+  NormalStream noise_;
 };
 
 class WhiteNoise : public Effect
@@ -427,22 +427,22 @@ public:
   WhiteNoise(const EffectSpec& spec, std::uint64_t seed, double rate)
     : accel_sigma_(vec3(spec, "accel_density") * std::sqrt(rate)),
       gyro_sigma_(vec3(spec, "gyro_density") * std::sqrt(rate)),
-      rng_(seed)
+      noise_(seed)
   {
   }
   void apply(const EffectInput&, ImuOutput& out) override
   {
     for (int i = 0; i < 3; ++i)
     {
-      out.accel[i] += accel_sigma_[i] * rng_.normal();
-      out.gyro[i] += gyro_sigma_[i] * rng_.normal();
+      out.accel[i] += accel_sigma_[i] * noise_.next();
+      out.gyro[i] += gyro_sigma_[i] * noise_.next();
     }
   }
 
 private:
   Vector3 accel_sigma_;
   Vector3 gyro_sigma_;
-  Rng rng_;
+  NormalStream noise_;
 };
 
 class Saturation : public Effect
@@ -508,18 +508,18 @@ class TimestampJitter : public Effect
 {
 public:
   TimestampJitter(const EffectSpec& spec, std::uint64_t seed)
-    : sigma_(num(spec, "sigma")), offset_(num(spec, "offset")), rng_(seed)
+    : sigma_(num(spec, "sigma")), offset_(num(spec, "offset")), noise_(seed)
   {
   }
   void apply(const EffectInput&, ImuOutput& out) override
   {
-    out.stamp_offset += offset_ + sigma_ * rng_.normal();
+    out.stamp_offset += offset_ + sigma_ * noise_.next();
   }
 
 private:
   double sigma_;
   double offset_;
-  Rng rng_;
+  NormalStream noise_;
 };
 
 /// Zero-order hold at the sensor's rate: measurements and orientation repeat until the next

@@ -1,5 +1,6 @@
 #include "periodic_bias_compensation/sim/random.h"
 
+#include <array>
 #include <cmath>
 
 namespace periodic_bias_compensation::sim
@@ -32,6 +33,77 @@ double Rng::normal()
   spare_ = r * std::sin(a);
   has_spare_ = true;
   return r * std::cos(a);
+}
+
+namespace
+{
+/// The ziggurat of N(0, 1) in 128 strips of equal area (Marsaglia and Tsang 2000, in Doornik's
+/// double-precision form, 2005): the strips' right edges and the ratio of each next edge to it.
+struct Ziggurat
+{
+  static constexpr int kStrips = 128;
+  static constexpr double kTail = 3.442619855899;       // right edge of the first strip
+  static constexpr double kArea = 9.91256303526217e-3;  // of each strip
+  std::array<double, kStrips + 1> edge;
+  std::array<double, kStrips> ratio;
+
+  Ziggurat()
+  {
+    const auto f = [](double x) { return std::exp(-0.5 * x * x); };
+    edge[0] = kArea / f(kTail);  // the base strip, its tail folded into a rectangle of that width
+    edge[1] = kTail;
+    for (int i = 2; i < kStrips; ++i)
+    {
+      edge[i] = std::sqrt(-2.0 * std::log(kArea / edge[i - 1] + f(edge[i - 1])));
+    }
+    edge[kStrips] = 0.0;
+    for (int i = 0; i < kStrips; ++i)
+    {
+      ratio[i] = edge[i + 1] / edge[i];
+    }
+  }
+};
+
+const Ziggurat kZiggurat;
+}  // namespace
+
+NormalStream::NormalStream(std::uint64_t seed) : engine_(seed)
+{
+}
+
+double NormalStream::next()
+{
+  const Ziggurat& z = kZiggurat;
+  const auto uniform = [this]() { return static_cast<double>(engine_() >> 11) * 0x1.0p-53; };
+  for (;;)
+  {
+    // One draw gives the abscissa's 53 bits (u in [-1, 1)) and, from its low bits, the strip.
+    const std::uint64_t bits = engine_();
+    const double u = 2.0 * (static_cast<double>(bits >> 11) * 0x1.0p-53) - 1.0;
+    const int i = static_cast<int>(bits & (Ziggurat::kStrips - 1));
+    if (std::abs(u) < z.ratio[i])
+    {
+      return u * z.edge[i];  // inside the strip's rectangle under the next strip: most draws
+    }
+    if (i == 0)
+    {
+      // The tail beyond kTail, by Marsaglia's exponential rejection.
+      double x, y;
+      do
+      {
+        x = std::log(1.0 - uniform()) / Ziggurat::kTail;
+        y = std::log(1.0 - uniform());
+      } while (-2.0 * y < x * x);
+      return u < 0.0 ? x - Ziggurat::kTail : Ziggurat::kTail - x;
+    }
+    const double x = u * z.edge[i];
+    const double f0 = std::exp(-0.5 * (z.edge[i] * z.edge[i] - x * x));
+    const double f1 = std::exp(-0.5 * (z.edge[i + 1] * z.edge[i + 1] - x * x));
+    if (f1 + uniform() * (f0 - f1) < 1.0)
+    {
+      return x;  // under the density in the strip's wedge
+    }
+  }
 }
 
 std::uint64_t mix64(std::uint64_t x)
