@@ -410,33 +410,80 @@ Line strongestLine(const Psd& real, const Vec& sim, double min_ratio, double min
   return best;
 }
 
+/// The normal equations' sums of a least-squares sinusoid in a channel.
+struct SinusoidSums
+{
+  double ss = 0, sc = 0, cc = 0, xs = 0, xc = 0;
+
+  void add(double x, double s, double c)
+  {
+    ss += s * s;
+    sc += s * c;
+    cc += c * c;
+    xs += x * s;
+    xc += x * c;
+  }
+
+  /// Amplitude and phase of A sin(2 pi f t + phi) (0 and 0 when singular).
+  void solve(double* amplitude, double* phase) const
+  {
+    const double det = ss * cc - sc * sc;
+    if (std::abs(det) < 1e-12)
+    {
+      *amplitude = 0;
+      *phase = 0;
+      return;
+    }
+    const double a = (xs * cc - xc * sc) / det;  // coefficient of sin
+    const double b = (xc * ss - xs * sc) / det;  // coefficient of cos
+    *amplitude = std::hypot(a, b);
+    *phase = std::atan2(b, a);
+  }
+};
+
 /// Least-squares phase and amplitude of A sin(2 pi f t + phi) in a channel (t since the start).
 void sinusoidFit(const Recording& r, int c, double f, double t0, double* amplitude, double* phase)
 {
-  double ss = 0, sc = 0, cc = 0, xs = 0, xc = 0;
+  SinusoidSums sums;
   const double m = r.data.col(c).mean();
   for (std::size_t i = 0; i < r.size(); ++i)
   {
     const double turns = f * (r.stamp[i] - t0);
     double s, co;
     sinCosTurn(turns - std::floor(turns), &s, &co);
-    ss += s * s;
-    sc += s * co;
-    cc += co * co;
-    xs += (r.data(i, c) - m) * s;
-    xc += (r.data(i, c) - m) * co;
+    sums.add(r.data(i, c) - m, s, co);
   }
-  const double det = ss * cc - sc * sc;
-  if (std::abs(det) < 1e-12)
+  sums.solve(amplitude, phase);
+}
+
+/// sinusoidFit at the frequencies f0 + k step for k = 0 .. n - 1, in one pass over the samples:
+/// each sample's phasor at f0 is turned by its phasor at `step`, k times.
+void sinusoidFitGrid(const Recording& r, int c, double f0, double step, int n, double t0,
+                     std::vector<double>* amplitude, std::vector<double>* phase)
+{
+  std::vector<SinusoidSums> sums(n);
+  const double m = r.data.col(c).mean();
+  for (std::size_t i = 0; i < r.size(); ++i)
   {
-    *amplitude = 0;
-    *phase = 0;
-    return;
+    const double t = r.stamp[i] - t0, x = r.data(i, c) - m;
+    const double turns = f0 * t, step_turns = step * t;
+    double s, co, ds, dc;
+    sinCosTurn(turns - std::floor(turns), &s, &co);
+    sinCosTurn(step_turns - std::floor(step_turns), &ds, &dc);
+    for (int k = 0; k < n; ++k)
+    {
+      sums[k].add(x, s, co);
+      const double s_next = s * dc + co * ds;
+      co = co * dc - s * ds;
+      s = s_next;
+    }
   }
-  const double a = (xs * cc - xc * sc) / det;  // coefficient of sin
-  const double b = (xc * ss - xs * sc) / det;  // coefficient of cos
-  *amplitude = std::hypot(a, b);
-  *phase = std::atan2(b, a);
+  amplitude->resize(n);
+  phase->resize(n);
+  for (int k = 0; k < n; ++k)
+  {
+    sums[k].solve(&(*amplitude)[k], &(*phase)[k]);
+  }
 }
 
 /// Frequency near f0 (within +-df) that maximises the least-squares sinusoid amplitude of the
@@ -473,35 +520,42 @@ double refineFrequency(const Recording& r, const std::vector<Recording>* sims, i
       }
     }
   }
-  double best_f = f0, best_a = -1, best_p = 0;
-  for (int i = -20; i <= 20; ++i)
+  // Trial frequencies f0 + df k / 20 for k = -20 .. 20 (those above 0).
+  constexpr int kHalf = 20;
+  const double step = df / kHalf;
+  std::vector<double> a, p;
+  sinusoidFitGrid(r, c, f0 - kHalf * step, step, 2 * kHalf + 1, t0, &a, &p);
+  std::vector<double> sa(a.size(), 0.0), sb(a.size(), 0.0);
+  for (const Recording* sr : ens)
   {
-    const double f = f0 + df * i / 20.0;
+    std::vector<double> aj, pj;
+    sinusoidFitGrid(*sr, c, f0 - kHalf * step, step, 2 * kHalf + 1, t0, &aj, &pj);
+    for (std::size_t k = 0; k < a.size(); ++k)
+    {
+      sa[k] += aj[k] * std::cos(pj[k]) / ens.size();
+      sb[k] += aj[k] * std::sin(pj[k]) / ens.size();
+    }
+  }
+  double best_f = f0, best_a = -1, best_p = 0;
+  for (int k = -kHalf; k <= kHalf; ++k)
+  {
+    const double f = f0 + df * k / kHalf;
     if (f <= 0)
     {
       continue;
     }
-    double a = 0, p = 0;
-    sinusoidFit(r, c, f, t0, &a, &p);
+    double ak = a[k + kHalf], pk = p[k + kHalf];
     if (!ens.empty())
     {
-      double sa = 0, sb = 0;
-      for (const Recording* sr : ens)
-      {
-        double aj = 0, pj = 0;
-        sinusoidFit(*sr, c, f, t0, &aj, &pj);
-        sa += aj * std::cos(pj) / ens.size();
-        sb += aj * std::sin(pj) / ens.size();
-      }
-      const double ra = a * std::cos(p) - sa, rb = a * std::sin(p) - sb;
-      a = std::hypot(ra, rb);
-      p = std::atan2(rb, ra);
+      const double ra = ak * std::cos(pk) - sa[k + kHalf], rb = ak * std::sin(pk) - sb[k + kHalf];
+      ak = std::hypot(ra, rb);
+      pk = std::atan2(rb, ra);
     }
-    if (a > best_a)
+    if (ak > best_a)
     {
-      best_a = a;
+      best_a = ak;
       best_f = f;
-      best_p = p;
+      best_p = pk;
     }
   }
   *amplitude = std::max(0.0, best_a);
@@ -1557,7 +1611,7 @@ std::vector<Candidate> fitCandidates(const Recording& real_fit, const std::vecto
   }
   const bool temperature = scenario.temperature.enabled && real_fit.has_temperature;
   const double start = real_fit.stamp.front();  // elapsed 0 of the matched scenario
-  FitContext context{ real_fit, sims_fit, scenario, scenario.rate, n, temperature, start, {}, {}, {}, {} };
+  FitContext context{ real_fit, sims_fit, scenario, scenario.rate, n, temperature, start, {}, {}, {}, {}, {} };
   const int nseg = welchSegment(n);
   std::vector<int> allan_m;
   for (int m = 1; static_cast<std::size_t>(m) * 10 <= n; m *= 2)
