@@ -14,8 +14,10 @@ namespace
 constexpr std::size_t kMaxFitSamples = 4096;
 /// Fewest stamps for the line fit; below it the period is the median of the recent steps.
 constexpr std::size_t kMinFitSamples = 32;
-/// Accepted samples between two line fits.
-constexpr int kFitInterval = 16;
+/// Accepted samples between two line fits: at least this many, and at least the fit's window
+/// over kFitsPerWindow (a fit costs a few passes over its window: a constant share per sample).
+constexpr std::size_t kFitInterval = 16;
+constexpr std::size_t kFitsPerWindow = 16;
 /// A step shorter than this many periods is one period: jitter, not a dropped sample [-].
 constexpr double kDropoutSteps = 1.75;
 
@@ -188,7 +190,7 @@ void TimeBase::accept(double t, double dt)
   tick_ += ticks;
   last_t_ = last_seen_t_ = t;
   addToFit(t);
-  if (++since_fit_ >= kFitInterval && fit_count_ >= kMinFitSamples)
+  if (++since_fit_ >= std::max(kFitInterval, fitWindow() / kFitsPerWindow) && fit_count_ >= kMinFitSamples)
   {
     since_fit_ = 0;
     fitPeriod();
@@ -203,11 +205,16 @@ void TimeBase::addToFit(double t)
   fit_count_ = std::min(fit_count_ + 1, kMaxFitSamples);
 }
 
-void TimeBase::fitPeriod()
+std::size_t TimeBase::fitWindow() const
 {
   // The newest stamps spanning kRateWindow (at the current period), at most the ring.
   const std::size_t wanted = period_ > 0.0 ? static_cast<std::size_t>(kRateWindow / period_) : fit_count_;
-  const std::size_t n = std::clamp(wanted, kMinFitSamples, fit_count_);
+  return std::clamp(wanted, kMinFitSamples, std::max(kMinFitSamples, fit_count_));
+}
+
+void TimeBase::fitPeriod()
+{
+  const std::size_t n = fitWindow();
   auto at = [&](std::size_t k) {  // k = 0 the oldest of the n used
     return (fit_next_ + kMaxFitSamples - n + k) % kMaxFitSamples;
   };

@@ -8,7 +8,8 @@
 //
 //  - takes the sample period from a least-squares line of stamps against sample count (ticks)
 //    over the last kRateWindow seconds, its outliers (residual beyond 4 robust standard
-//    deviations) left out, never from a mean of 1 / dt;
+//    deviations) left out, never from a mean of 1 / dt; the line is refitted each time a
+//    sixteenth of its stamps is new;
 //  - gives each accepted sample the step ticks x period, ticks >= 1 the periods since the
 //    previous sample read off that line, so a jittered stamp does not jitter the integration and
 //    a dropped sample is stepped over;
@@ -124,6 +125,7 @@ private:
   void startRecord();
   void noteStep(double dt);
   void addToFit(double t);
+  std::size_t fitWindow() const;  ///< stamps the next line fit takes
   void fitPeriod();
 
   double max_gap_;
@@ -139,10 +141,9 @@ private:
   std::size_t fit_next_ = 0;  ///< where the next entry goes
   std::size_t fit_count_ = 0;
   double tick_ = 0.0;
-  double last_ticks_ = 1.0;
-  double skipped_ =
-      0.0;  ///< stamps dropped since the newest accepted one  ///< periods the newest accepted sample was counted after its predecessor
-  int since_fit_ = 0;
+  double last_ticks_ = 1.0;  ///< periods the newest accepted sample was counted after its predecessor
+  double skipped_ = 0.0;     ///< stamps dropped since the newest accepted one
+  std::size_t since_fit_ = 0;
   std::vector<double> scratch_;
   bool has_line_ = false;    ///< the fit's line is known: ticks come from it
   double line_tick_ = 0.0;   ///< a tick on the line
