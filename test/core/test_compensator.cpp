@@ -252,7 +252,9 @@ TEST(Compensator, TheConfiguredWaveBandHoldsWithoutACalibrationWindow)
   {
     Compensator c(config);
     if (from_file)
+    {
       ASSERT_TRUE(c.setConstantBias(bias));
+    }
     double wave2 = 0.0, truth2 = 0.0;
     for (int k = 0; k < static_cast<int>(300 * rate); ++k)
     {
