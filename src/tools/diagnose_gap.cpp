@@ -31,6 +31,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <future>
 #include <iostream>
 #include <map>
 #include <optional>
@@ -602,14 +603,12 @@ std::string stepwiseLine(const std::vector<Step>& steps)
   return so.str();
 }
 
-/// Writes the report's files to DIR (and the plots unless --no-plots).
-void writeReport(const gap::Report& rep, const Stepwise& s, const Options& o)
+/// Writes the first diagnosis's curves to DIR (its plots' data).
+void writeCurves(const gap::Report& rep, const Options& o)
 {
   const auto write = [&o](const std::string& name, const std::string& contents) {
     periodic_bias_compensation::writeOutputFile((fs::path(o.out) / name).string(), contents);
   };
-  write("report.json", stepwiseJson(rep, s.steps));
-  write("fitted_scenario.yaml", sim::toYaml(s.model));
   write("psd.csv", rep.psd_csv);
   write("allan.csv", rep.allan_csv);
   write("drift.csv", rep.drift_csv);
@@ -622,7 +621,16 @@ void writeReport(const gap::Report& rep, const Stepwise& s, const Options& o)
   {
     write("motion.csv", rep.motion_csv);
   }
-  const bool plots = o.plots && makePlots(rep, o);
+}
+
+/// Writes the report's files to DIR; `plots`: whether the plots were made.
+void writeReport(const gap::Report& rep, const Stepwise& s, const Options& o, bool plots)
+{
+  const auto write = [&o](const std::string& name, const std::string& contents) {
+    periodic_bias_compensation::writeOutputFile((fs::path(o.out) / name).string(), contents);
+  };
+  write("report.json", stepwiseJson(rep, s.steps));
+  write("fitted_scenario.yaml", sim::toYaml(s.model));
   std::string md = reportMarkdown(rep, o, plots);
   md.insert(md.find("\nMethod and limits"), stepwiseMarkdown(s.steps));
   write("report.md", md);
@@ -672,8 +680,11 @@ int main(int argc, char** argv)
     const gap::Report rep = gap::diagnose(real, scenario, o.diag);
     std::fprintf(stderr, "diagnose_gap: step 1: verdict %s, withheld gap %.3g (%.1f s)\n", rep.verdict_effect.c_str(),
                  rep.gap_before, rep.seconds);
+    // The plots are of the first diagnosis: drawn while the stepwise search runs.
+    writeCurves(rep, o);
+    std::future<bool> plots = std::async(std::launch::async, [&rep, &o]() { return o.plots && makePlots(rep, o); });
     const Stepwise s = stepwiseDiagnosis(rep, real, scenario, o);
-    writeReport(rep, s, o);
+    writeReport(rep, s, o, plots.get());
     std::cout << gap::reportSummary(rep) << stepwiseLine(s.steps) << "\nreport: " << o.out << "/report.md, " << o.out
               << "/report.json, " << o.out << "/fitted_scenario.yaml\n";
   }
