@@ -33,7 +33,7 @@ private:
 };
 
 /// Standard normal draws N(0, 1) by the ziggurat method (Marsaglia and Tsang; Doornik's
-/// double-precision form): one 64-bit draw for most of them, several times faster than
+/// double-precision form): one 64-bit draw and no log, sine or cosine for most of them, unlike
 /// Rng::normal(). For the per-sample noise of the sensor effects.
 class NormalStream
 {
