@@ -207,9 +207,11 @@ void TimeBase::addToFit(double t)
 
 std::size_t TimeBase::fitWindow() const
 {
-  // The newest stamps spanning kRateWindow (at the current period), at most the ring.
-  const std::size_t wanted = period_ > 0.0 ? static_cast<std::size_t>(kRateWindow / period_) : fit_count_;
-  return std::clamp(wanted, kMinFitSamples, std::max(kMinFitSamples, fit_count_));
+  // The newest stamps spanning kRateWindow (at the current period), at most the ring. Compared
+  // as doubles first: a period of 1e-77 s would overflow the count.
+  const std::size_t most = std::max(kMinFitSamples, fit_count_);
+  const double wanted = period_ > 0.0 ? kRateWindow / period_ : static_cast<double>(fit_count_);
+  return wanted >= static_cast<double>(most) ? most : std::max(kMinFitSamples, static_cast<std::size_t>(wanted));
 }
 
 void TimeBase::fitPeriod()
