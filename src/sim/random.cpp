@@ -5,13 +5,27 @@
 
 namespace periodic_bias_compensation::sim
 {
+namespace
+{
+/// The uniform in [0, 1) of 64 random bits: their top 53.
+double unitOf(std::uint64_t bits)
+{
+  return static_cast<double>(bits >> 11) * 0x1.0p-53;
+}
+}  // namespace
+
 Rng::Rng(std::uint64_t seed) : engine_(seed)
 {
 }
 
+std::uint64_t Rng::bits()
+{
+  return engine_();
+}
+
 double Rng::uniform()
 {
-  return static_cast<double>(engine_() >> 11) * 0x1.0p-53;
+  return unitOf(bits());
 }
 
 double Rng::uniform(double lo, double hi)
@@ -67,19 +81,18 @@ struct Ziggurat
 const Ziggurat kZiggurat;
 }  // namespace
 
-NormalStream::NormalStream(std::uint64_t seed) : engine_(seed)
+NormalStream::NormalStream(std::uint64_t seed) : rng_(seed)
 {
 }
 
 double NormalStream::next()
 {
   const Ziggurat& z = kZiggurat;
-  const auto uniform = [this]() { return static_cast<double>(engine_() >> 11) * 0x1.0p-53; };
   for (;;)
   {
     // One draw gives the abscissa's 53 bits (u in [-1, 1)) and, from its low bits, the strip.
-    const std::uint64_t bits = engine_();
-    const double u = 2.0 * (static_cast<double>(bits >> 11) * 0x1.0p-53) - 1.0;
+    const std::uint64_t bits = rng_.bits();
+    const double u = 2.0 * unitOf(bits) - 1.0;
     const int i = static_cast<int>(bits & (Ziggurat::kStrips - 1));
     if (std::abs(u) < z.ratio[i])
     {
@@ -91,15 +104,15 @@ double NormalStream::next()
       double x, y;
       do
       {
-        x = std::log(1.0 - uniform()) / Ziggurat::kTail;
-        y = std::log(1.0 - uniform());
+        x = std::log(1.0 - rng_.uniform()) / Ziggurat::kTail;
+        y = std::log(1.0 - rng_.uniform());
       } while (-2.0 * y < x * x);
       return u < 0.0 ? x - Ziggurat::kTail : Ziggurat::kTail - x;
     }
     const double x = u * z.edge[i];
     const double f0 = std::exp(-0.5 * (z.edge[i] * z.edge[i] - x * x));
     const double f1 = std::exp(-0.5 * (z.edge[i + 1] * z.edge[i + 1] - x * x));
-    if (f1 + uniform() * (f0 - f1) < 1.0)
+    if (f1 + rng_.uniform() * (f0 - f1) < 1.0)
     {
       return x;  // under the density in the strip's wedge
     }

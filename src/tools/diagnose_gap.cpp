@@ -603,37 +603,37 @@ std::string stepwiseLine(const std::vector<Step>& steps)
   return so.str();
 }
 
+/// Writes a file of the report to DIR.
+void writeFile(const Options& o, const std::string& name, const std::string& contents)
+{
+  periodic_bias_compensation::writeOutputFile((fs::path(o.out) / name).string(), contents);
+}
+
 /// Writes the first diagnosis's curves to DIR (its plots' data).
 void writeCurves(const gap::Report& rep, const Options& o)
 {
-  const auto write = [&o](const std::string& name, const std::string& contents) {
-    periodic_bias_compensation::writeOutputFile((fs::path(o.out) / name).string(), contents);
-  };
-  write("psd.csv", rep.psd_csv);
-  write("allan.csv", rep.allan_csv);
-  write("drift.csv", rep.drift_csv);
-  write("features.csv", rep.features_csv);
+  writeFile(o, "psd.csv", rep.psd_csv);
+  writeFile(o, "allan.csv", rep.allan_csv);
+  writeFile(o, "drift.csv", rep.drift_csv);
+  writeFile(o, "features.csv", rep.features_csv);
   if (rep.has_truth)
   {
-    write("truth.csv", rep.truth_csv);
+    writeFile(o, "truth.csv", rep.truth_csv);
   }
   if (!rep.motion_csv.empty())
   {
-    write("motion.csv", rep.motion_csv);
+    writeFile(o, "motion.csv", rep.motion_csv);
   }
 }
 
 /// Writes the report's files to DIR; `plots`: whether the plots were made.
 void writeReport(const gap::Report& rep, const Stepwise& s, const Options& o, bool plots)
 {
-  const auto write = [&o](const std::string& name, const std::string& contents) {
-    periodic_bias_compensation::writeOutputFile((fs::path(o.out) / name).string(), contents);
-  };
-  write("report.json", stepwiseJson(rep, s.steps));
-  write("fitted_scenario.yaml", sim::toYaml(s.model));
+  writeFile(o, "report.json", stepwiseJson(rep, s.steps));
+  writeFile(o, "fitted_scenario.yaml", sim::toYaml(s.model));
   std::string md = reportMarkdown(rep, o, plots);
   md.insert(md.find("\nMethod and limits"), stepwiseMarkdown(s.steps));
-  write("report.md", md);
+  writeFile(o, "report.md", md);
 }
 }  // namespace
 

@@ -15,6 +15,9 @@ public:
   /// @param seed stream seed [-]
   explicit Rng(std::uint64_t seed);
 
+  /// The engine's next 64 random bits.
+  std::uint64_t bits();
+
   /// Uniform double in [0, 1) with 53 random bits.
   double uniform();
 
@@ -45,7 +48,7 @@ public:
   double next();
 
 private:
-  std::mt19937_64 engine_;
+  Rng rng_;
 };
 
 /// SplitMix64 finaliser: a well-mixed 64-bit function of x.
