@@ -5,7 +5,7 @@
 namespace periodic_bias_compensation
 {
 BroadbandWave::BroadbandWave(bool vertical, double corner_frequency, double min_frequency)
-  : vertical_(vertical), min_frequency_(min_frequency)
+  : vertical_(vertical), min_frequency_(min_frequency), spectral_(kBandEdge * min_frequency, vertical)
 {
   configure(corner_frequency, min_frequency);
 }

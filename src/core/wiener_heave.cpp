@@ -50,7 +50,7 @@ bool solveToeplitz(const std::vector<double>& t, const std::vector<double>& b, s
 }
 }  // namespace
 
-WienerHeave::WienerHeave(double min_frequency) : min_frequency_(min_frequency)
+WienerHeave::WienerHeave(double min_frequency, bool vertical) : min_frequency_(min_frequency), vertical_(vertical)
 {
   setMinFrequency(min_frequency);
 }
@@ -195,12 +195,11 @@ void WienerHeave::apply(const Design& d, double* x, double* v) const
   *v = (pv[0] + pv[1]) + (pv[2] + pv[3]);
 }
 
-WienerHeave::Statistics WienerHeave::statistics(int segment, double mean, double noise_density_squared) const
+std::vector<double> WienerHeave::welch(int segment, double mean, std::vector<double>* response) const
 {
   RealFft& fft = *transform_.fft;
   const int n = static_cast<int>(decimated_.size());
   const double fs = 1.0 / (decimation_ * dt_);
-  // Welch: two-sided density [(m/s^2)^2/Hz] at kDftSize / 2 + 1 frequencies.
   const int bins = kDftSize / 2 + 1;
   std::vector<double> density(bins, 0.0);
   double window_power = 0.0;
@@ -217,20 +216,78 @@ WienerHeave::Statistics WienerHeave::statistics(int segment, double mean, double
   }
   for (double& d : density)
     d /= segments * window_power * fs;
+  // The window spreads every line over neighbouring bins (over +-2 bins of a segment in its main
+  // lobe). Its response, relative to its peak:
+  for (int i = 0; i < kDftSize; ++i)
+    fft.in[i] = i < segment ? window[i] : 0.0;
+  fft.execute();
+  response->resize(bins);
+  for (int k = 0; k < bins; ++k)
+    (*response)[k] = fft.power(k) / fft.power(0);
+  return density;
+}
+
+std::vector<double> WienerHeave::burg(int order, double mean) const
+{
+  // Forward and backward prediction errors; each stage's reflection coefficient minimises their
+  // summed power (Burg), which keeps the model stable (|k| < 1).
+  const int n = static_cast<int>(decimated_.size());
+  std::vector<double> forward(n), backward(n), a(1, 1.0), previous;
+  double power = 0.0;
+  for (int i = 0; i < n; ++i)
+  {
+    forward[i] = backward[i] = decimated_[i] - mean;
+    power += forward[i] * forward[i];
+  }
+  power /= n;
+  for (int m = 1; m <= order; ++m)
+  {
+    double cross = 0.0, sum = 0.0;
+    for (int i = m; i < n; ++i)
+    {
+      cross += forward[i] * backward[i - 1];
+      sum += forward[i] * forward[i] + backward[i - 1] * backward[i - 1];
+    }
+    if (!(sum > 0.0))
+      break;
+    const double k = -2.0 * cross / sum;
+    for (int i = n - 1; i >= m; --i)
+    {
+      const double f = forward[i];
+      forward[i] = f + k * backward[i - 1];
+      backward[i] = backward[i - 1] + k * f;
+    }
+    a.push_back(0.0);
+    previous = a;
+    for (int j = 1; j <= m; ++j)
+      a[j] = previous[j] + k * previous[m - j];
+    power *= 1.0 - k * k;
+  }
+  // Density power / (fs |A(f)|^2), A the prediction-error filter's response.
+  RealFft& fft = *transform_.fft;
+  std::fill(fft.in, fft.in + kDftSize, 0.0);
+  std::copy(a.begin(), a.end(), fft.in);
+  fft.execute();
+  const double fs = 1.0 / (decimation_ * dt_);
+  std::vector<double> density(kDftSize / 2 + 1);
+  for (std::size_t k = 0; k < density.size(); ++k)
+    density[k] = power / (fs * std::max(fft.power(static_cast<int>(k)), 1e-300));
+  return density;
+}
+
+WienerHeave::Statistics WienerHeave::statistics(std::vector<double> density, const std::vector<double>& response,
+                                                double noise_density_squared) const
+{
+  RealFft& fft = *transform_.fft;
+  const double fs = 1.0 / (decimation_ * dt_);
+  const int bins = kDftSize / 2 + 1;
 
   // Wave acceleration and the cross-spectrum E[x a_d*] of displacement and low-passed
   // acceleration; the low-pass's response AA (two moving averages of D samples at dt).
   const double df = fs / kDftSize;
   const double floor = 0.5 * std::max(noise_density_squared, 0.0);
-  // The window spreads every line over neighbouring bins (over +-2 bins of a segment in its main
-  // lobe): power a bin in the band may owe to the bias wander below min_frequency, the largest
-  // lines of the spectrum, is not wave. The window's response, relative to its peak:
-  for (int i = 0; i < kDftSize; ++i)
-    fft.in[i] = i < segment ? window[i] : 0.0;
-  fft.execute();
-  std::vector<double> response(bins);
-  for (int k = 0; k < bins; ++k)
-    response[k] = fft.power(k) / fft.power(0);
+  // Power a bin in the band may owe through the window to the lines below min_frequency (bias
+  // wander, a manoeuvre: the largest lines of the spectrum) is not wave.
   const int below = std::min(bins, static_cast<int>(std::ceil(min_frequency_ / df)));
   std::vector<std::complex<double>> cross(bins);
   Statistics out;
@@ -241,13 +298,18 @@ WienerHeave::Statistics WienerHeave::statistics(int segment, double mean, double
     const double half = 0.5 * omega * dt_;
     const double ratio = std::sin(decimation_ * half) / (decimation_ * std::sin(half));
     const double gain = ratio * ratio;
+    // An autoregressive model of a record holds lines with next to no power between them; the
+    // sensor's white noise is there all the same (and keeps the normal equations well posed).
+    if (response.empty())
+      density[k] = std::max(density[k], floor * gain * gain);
     const std::complex<double> aa = gain * std::polar(1.0, -omega * (decimation_ - 1) * dt_);
     double wave = 0.0;
     if (k >= below && gain > 1e-6)
     {
       double leak = 0.0;
-      for (int j = 0; j < below; ++j)
-        leak += density[j] * response[k - j];
+      if (!response.empty())
+        for (int j = 0; j < below; ++j)
+          leak += density[j] * response[k - j];
       wave = std::max(0.0, density[k] - kNoiseMargin * (floor * gain * gain + leak)) / (gain * gain);
     }
     cross[k] = -std::conj(aa) * wave / (omega * omega);
@@ -297,14 +359,18 @@ void WienerHeave::design(double noise_density_squared)
     mean += value;
   mean /= n;
 
-  // Segments of kSegment once the record holds two; before that the whole record as one: on a
-  // short record the resolution decides (a swell lies within the main lobe of short segments'
-  // zero frequency), more than the variance that averaging segments removes.
-  const bool whole = n < 2 * kSegment;
-  const Statistics fit = statistics(whole ? n : kSegment, mean, noise_density_squared);
-  peak_frequency_ = fit.peak_frequency;
+  // On a short record the resolution decides (a swell lies within the main lobe of a short
+  // window's zero frequency): Burg's estimate resolves what no window does. On a long horizontal
+  // record a manoeuvre's low lines weigh more, and Welch's segments say what the band owes them.
+  std::vector<double> density, response;
+  if (vertical_ && n >= 2 * kSegment)
+    density = burg(kMaxOrder, mean);
+  else
+    density = welch(n < 2 * kSegment ? n : kSegment, mean, &response);
+  const Statistics fit = statistics(std::move(density), response, noise_density_squared);
   if (fit.autocorrelation.empty())
   {
+    peak_frequency_ = 0.0;
     // No wave in the spectrum: no heave.
     auto none = std::make_shared<Design>();
     none->position.assign(1, 0.0);
@@ -319,7 +385,8 @@ void WienerHeave::design(double noise_density_squared)
   auto next = std::make_shared<Design>();
   if (!solveToeplitz(fit.autocorrelation, fit.r_position, &next->position) ||
       !solveToeplitz(fit.autocorrelation, fit.r_velocity, &next->velocity))
-    return;  // keep the last design
+    return;  // keep the last design, and its peak
+  peak_frequency_ = fit.peak_frequency;
   // The expected error E[(x - h a)^2] = var(x) - h r of taps solved from these statistics
   // (R h = r).
   double explained = 0.0, explained_velocity = 0.0;

@@ -10,9 +10,12 @@
 //     at the full rate, and every D-th value at the design rate 1 / (D dt) ~ 2 Hz;
 //  2. every kRedesignInterval (kEarlyRedesignInterval while the record is shorter than
 //     kEarlyRecord: each design from a short record improves on the last by more), from the last
-//     kDesignWindow of design-rate values: a Welch
-//     spectrum (Hann segments of kSegment, half overlap; the whole record as one segment while it
-//     is shorter than two), the wave acceleration in it
+//     kDesignWindow of design-rate values: a spectrum, Welch's (Hann segments of kSegment, half
+//     overlap; the whole record as one segment while it is shorter than two) less what a bin
+//     may owe through the window to the lines below min_frequency; on the vertical axis, once
+//     the record holds two segments, Burg's maximum-entropy estimate instead (an autoregressive
+//     model of kMaxOrder, with the white-noise floor under it), whose resolution separates a
+//     slow bias line from a swell without a window's main lobe; the wave acceleration in it
 //     (the spectrum less three times the white-noise floor, nothing below min_frequency), and
 //     from that the cross-correlation between displacement (acceleration / -omega^2) and the
 //     low-passed acceleration, and the acceleration's autocorrelation from the same spectrum;
@@ -60,6 +63,7 @@ public:
   static constexpr double kEarlyRedesignInterval = 5.0;  ///< while the record is short [s]
   static constexpr double kEarlyRecord = 300.0;          ///< a record shorter than this is short [s]
   static constexpr int kSegment = 256;                   ///< Welch segment [design-rate samples]
+  static constexpr int kMaxOrder = 160;                  ///< of the Burg model [design-rate samples]
   static constexpr int kMinSegment = 40;                 ///< the shortest record designed from
   static constexpr int kDftSize = 1024;                  ///< zero-padded transform of a segment
   static constexpr double kSpanPeriods = 6.0;            ///< FIR span in peak periods
@@ -73,8 +77,9 @@ public:
   /// design are the old rate's) [-].
   static constexpr double kPeriodChange = 0.1;
 
-  /// min_frequency [Hz]: the lowest wave frequency; below it nothing is heave.
-  explicit WienerHeave(double min_frequency = 0.04);
+  /// min_frequency [Hz]: the lowest wave frequency; below it nothing is heave. `vertical`: the
+  /// record holds no manoeuvre, and Burg's estimate serves its long records.
+  explicit WienerHeave(double min_frequency = 0.04, bool vertical = false);
 
   /// Forgets everything; the next sample starts a new record.
   void reset();
@@ -136,11 +141,22 @@ private:
     double velocity_variance = 0.0;
     double peak_frequency = 0.0;  ///< of the displacement spectrum [Hz] (0: no wave)
   };
-  Statistics statistics(int segment, double mean, double noise_density_squared) const;
+  /// Two-sided density of the design-rate values less `mean` [(m/s^2)^2/Hz] at kDftSize / 2 + 1
+  /// frequencies: Welch's with Hann segments of `segment` values, half overlap, and in
+  /// *response the window's power response relative to its peak at the same frequencies.
+  std::vector<double> welch(int segment, double mean, std::vector<double>* response) const;
+  /// The same by Burg's method, an autoregressive model of `order` fitted to the whole record
+  /// (no window).
+  std::vector<double> burg(int order, double mean) const;
+  /// `response` empty: Burg's density, which owes nothing to the lines below min_frequency
+  /// through a window; the white-noise floor is put under it.
+  Statistics statistics(std::vector<double> density, const std::vector<double>& response,
+                        double noise_density_squared) const;
   void design(double noise_density_squared);
   void apply(const Design& d, double* x, double* v) const;
 
   double min_frequency_;
+  bool vertical_;
   double dt_ = 0.0;        ///< the sample period, the owner's latest [s]
   double sized_dt_ = 0.0;  ///< the period the record began with, which sized the buffers [s]
   int decimation_ = 0;
