@@ -359,9 +359,12 @@ void WienerHeave::design(double noise_density_squared)
     mean += value;
   mean /= n;
 
-  // On a short record the resolution decides (a swell lies within the main lobe of a short
-  // window's zero frequency): Burg's estimate resolves what no window does. On a long horizontal
-  // record a manoeuvre's low lines weigh more, and Welch's segments say what the band owes them.
+  // Segments of kSegment once the record holds two; before that the whole record as one: on a
+  // short record the resolution decides (a swell lies within the main lobe of short segments'
+  // zero frequency), more than the variance that averaging segments removes. A long vertical
+  // record takes Burg's estimate, which needs no window: no lobe spreads a slow bias line over
+  // the band's edge. Horizontally a manoeuvre's lines are the largest, and Welch's window says
+  // what the band owes them.
   std::vector<double> density, response;
   if (vertical_ && n >= 2 * kSegment)
     density = burg(kMaxOrder, mean);
