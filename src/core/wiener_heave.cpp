@@ -276,49 +276,72 @@ std::vector<double> WienerHeave::burg(int order, double mean) const
 }
 
 WienerHeave::Statistics WienerHeave::statistics(std::vector<double> density, const std::vector<double>& response,
-                                                double noise_density_squared) const
+                                                double noise_density_squared, bool short_record) const
 {
   RealFft& fft = *transform_.fft;
   const double fs = 1.0 / (decimation_ * dt_);
   const int bins = kDftSize / 2 + 1;
 
-  // Wave acceleration and the cross-spectrum E[x a_d*] of displacement and low-passed
-  // acceleration; the low-pass's response AA (two moving averages of D samples at dt).
+  // Wave acceleration per bin, less the white noise and, through a window, what a bin may owe to
+  // the lines below min_frequency (bias wander, a manoeuvre: the largest lines of the spectrum).
   const double df = fs / kDftSize;
   const double floor = 0.5 * std::max(noise_density_squared, 0.0);
-  // Power a bin in the band may owe through the window to the lines below min_frequency (bias
-  // wander, a manoeuvre: the largest lines of the spectrum) is not wave.
   const int below = std::min(bins, static_cast<int>(std::ceil(min_frequency_ / df)));
+  // A short record's autoregressive model cannot tell a line below the band from the band's first
+  // kEdgeResolution / T (T the record's length): the band starts that much higher.
+  const double record = static_cast<double>(decimated_.size()) / fs;
+  const int first = short_record
+                        ? std::min(bins, static_cast<int>(std::ceil((min_frequency_ + kEdgeResolution / record) / df)))
+                        : below;
+  std::vector<double> wave(bins, 0.0), gain(bins, 0.0);
+  for (int k = 1; k < bins; ++k)
+  {
+    const double half = M_PI * k * df * dt_;
+    const double ratio = std::sin(decimation_ * half) / (decimation_ * std::sin(half));
+    gain[k] = ratio * ratio;
+    // An autoregressive model of a record holds lines with next to no power between them; the
+    // sensor's white noise is there all the same (and keeps the normal equations well posed).
+    if (response.empty())
+      density[k] = std::max(density[k], floor * gain[k] * gain[k]);
+    if (k >= first && gain[k] > 1e-6)
+    {
+      double leak = 0.0;
+      if (!response.empty())
+        for (int j = 0; j < below; ++j)
+          leak += density[j] * response[k - j];
+      wave[k] = std::max(0.0, density[k] - kNoiseMargin * (floor * gain[k] * gain[k] + leak)) / (gain[k] * gain[k]);
+    }
+  }
+  const auto displacement = [&](int k) {
+    const double omega = 2.0 * M_PI * k * df;
+    return wave[k] / (omega * omega * omega * omega);
+  };
+  // On a short record, a displacement density that falls from the band's start is the skirt of a
+  // line below it, not a sea: the band starts at the skirt's foot.
+  if (short_record && first > 0)
+  {
+    int foot = first;
+    while (foot + 1 < bins && displacement(foot) > 0.0 && displacement(foot + 1) <= displacement(foot))
+      ++foot;
+    if (foot > first)
+      std::fill(wave.begin(), wave.begin() + foot, 0.0);
+  }
+
+  // The cross-spectrum E[x a_d*] of displacement and low-passed acceleration; the low-pass's
+  // response AA (two moving averages of D samples at dt).
   std::vector<std::complex<double>> cross(bins);
   Statistics out;
   double peak = 0.0;
   for (int k = 1; k < bins; ++k)
   {
     const double f = k * df, omega = 2.0 * M_PI * f;
-    const double half = 0.5 * omega * dt_;
-    const double ratio = std::sin(decimation_ * half) / (decimation_ * std::sin(half));
-    const double gain = ratio * ratio;
-    // An autoregressive model of a record holds lines with next to no power between them; the
-    // sensor's white noise is there all the same (and keeps the normal equations well posed).
-    if (response.empty())
-      density[k] = std::max(density[k], floor * gain * gain);
-    const std::complex<double> aa = gain * std::polar(1.0, -omega * (decimation_ - 1) * dt_);
-    double wave = 0.0;
-    if (k >= below && gain > 1e-6)
+    const std::complex<double> aa = gain[k] * std::polar(1.0, -omega * (decimation_ - 1) * dt_);
+    cross[k] = -std::conj(aa) * wave[k] / (omega * omega);
+    out.displacement_variance += 2.0 * displacement(k) * df;
+    out.velocity_variance += 2.0 * displacement(k) * omega * omega * df;
+    if (displacement(k) > peak)
     {
-      double leak = 0.0;
-      if (!response.empty())
-        for (int j = 0; j < below; ++j)
-          leak += density[j] * response[k - j];
-      wave = std::max(0.0, density[k] - kNoiseMargin * (floor * gain * gain + leak)) / (gain * gain);
-    }
-    cross[k] = -std::conj(aa) * wave / (omega * omega);
-    const double displacement = wave / (omega * omega * omega * omega);
-    out.displacement_variance += 2.0 * displacement * df;
-    out.velocity_variance += 2.0 * displacement * omega * omega * df;
-    if (displacement > peak)
-    {
-      peak = displacement;
+      peak = displacement(k);
       out.peak_frequency = f;
     }
   }
@@ -364,13 +387,23 @@ void WienerHeave::design(double noise_density_squared)
   // zero frequency), more than the variance that averaging segments removes. A long vertical
   // record takes Burg's estimate, which needs no window: no lobe spreads a slow bias line over
   // the band's edge. Horizontally a manoeuvre's lines are the largest, and Welch's window says
-  // what the band owes them.
-  std::vector<double> density, response;
+  // what the band owes them. A short vertical record whose window leaves its displacement peak
+  // (or none) within kResolvedCycles cycles of zero frequency takes Burg's estimate too, of order
+  // kShortOrder times its length: a swell a window cannot resolve yet (a line it resolves, Burg's
+  // model of a short record splits and moves).
+  Statistics fit;
   if (vertical_ && n >= 2 * kSegment)
-    density = burg(kMaxOrder, mean);
+    fit = statistics(burg(kMaxOrder, mean), {}, noise_density_squared, false);
   else
-    density = welch(n < 2 * kSegment ? n : kSegment, mean, &response);
-  const Statistics fit = statistics(std::move(density), response, noise_density_squared);
+  {
+    std::vector<double> response;
+    std::vector<double> density = welch(n < 2 * kSegment ? n : kSegment, mean, &response);
+    fit = statistics(std::move(density), response, noise_density_squared, false);
+    const double record = n * decimation_ * dt_;
+    if (vertical_ && fit.peak_frequency * record < kResolvedCycles)
+      fit = statistics(burg(std::min(kMaxOrder, static_cast<int>(kShortOrder * n)), mean), {}, noise_density_squared,
+                       true);
+  }
   if (fit.autocorrelation.empty())
   {
     peak_frequency_ = 0.0;

@@ -15,10 +15,14 @@
 //     may owe through the window to the lines below min_frequency; on the vertical axis, once
 //     the record holds two segments, Burg's maximum-entropy estimate instead (an autoregressive
 //     model of kMaxOrder, with the white-noise floor under it), whose resolution separates a
-//     slow bias line from a swell without a window's main lobe; the wave acceleration in it
-//     (the spectrum less three times the white-noise floor, nothing below min_frequency), and
-//     from that the cross-correlation between displacement (acceleration / -omega^2) and the
-//     low-passed acceleration, and the acceleration's autocorrelation from the same spectrum;
+//     slow bias line from a swell without a window's main lobe, and on a shorter vertical record
+//     whose window cannot resolve its displacement peak from zero frequency (a swell in the
+//     first minute) Burg's estimate of order kShortOrder times its length, its band started
+//     kEdgeResolution / T above min_frequency and above the skirt of a line below; the wave
+//     acceleration in it (the spectrum less three times the white-noise floor, nothing below
+//     min_frequency), and from that the cross-correlation between displacement (acceleration /
+//     -omega^2) and the low-passed acceleration, and the acceleration's autocorrelation from the
+//     same spectrum;
 //  3. solves the Wiener-Hopf (normal) equations for a causal FIR over a span of six peak
 //     periods (kSpanPeriods, kMinSpan..kMaxSpan; no longer than the input held since reset())
 //     at the design rate, for displacement and velocity (Levinson recursion);
@@ -76,6 +80,13 @@ public:
   /// Relative change of the sample period that starts the record over (the buffers and the
   /// design are the old rate's) [-].
   static constexpr double kPeriodChange = 0.1;
+  /// A window resolves a displacement peak from zero frequency once the record holds this many of
+  /// its cycles [-].
+  static constexpr double kResolvedCycles = 3.0;
+  /// Burg's order on a short vertical record, a share of its length [-].
+  static constexpr double kShortOrder = 0.5;
+  /// Width above min_frequency that a short record cannot tell from below it, over its length [-].
+  static constexpr double kEdgeResolution = 0.5;
 
   /// min_frequency [Hz]: the lowest wave frequency; below it nothing is heave. `vertical`: the
   /// record holds no manoeuvre, and Burg's estimate serves its long records.
@@ -149,9 +160,11 @@ private:
   /// (no window).
   std::vector<double> burg(int order, double mean) const;
   /// `response` empty: Burg's density, which owes nothing to the lines below min_frequency
-  /// through a window; the white-noise floor is put under it.
-  Statistics statistics(std::vector<double> density, const std::vector<double>& response,
-                        double noise_density_squared) const;
+  /// through a window; the white-noise floor is put under it. `short_record`: Burg's density of a
+  /// short record, whose band starts kEdgeResolution / T above min_frequency and above the skirt
+  /// of a line below it.
+  Statistics statistics(std::vector<double> density, const std::vector<double>& response, double noise_density_squared,
+                        bool short_record) const;
   void design(double noise_density_squared);
   void apply(const Design& d, double* x, double* v) const;
 
