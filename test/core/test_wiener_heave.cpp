@@ -219,8 +219,9 @@ TEST(WienerHeave, VerticalFirstMinuteByBurg)
 
 // A single line (a shaken bench) on a short vertical record: the window resolves it, so Burg's
 // model of a short record, which splits a line and puts part of it at the band's edge, is not
-// taken. Every design puts the peak within a tenth of the line (where the owner takes a lock for
-// off the peak), and the displacement stays within 15 % of its RMS from 15 s on.
+// taken. Every design puts the peak within a tenth of the line (the owner counts a lock farther
+// than that from the design's peak as off it), and the displacement stays within 15 % of its RMS
+// from 15 s on.
 TEST(WienerHeave, ShortRecordsKeepALineWhereItIs)
 {
   std::mt19937_64 rng(3);
