@@ -57,6 +57,8 @@ BroadbandWaveOutput BroadbandWave::update(const BroadbandWaveInput& in)
   const double density = noiseDensitySquared(in.rate);
   if (in.turning && vertical_)
     spectral_.restartRecord();
+  if (!vertical_ && (in.turning || !in.allowed))
+    spectral_.noteManoeuvre();
   const WienerHeaveOutput spectral =
       spectral_.update(in.offset_free, in.rate_settled && in.rate > 0.0 ? 1.0 / in.rate : 0.0, density);
   if (dt > 0.0)

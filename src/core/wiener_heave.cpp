@@ -76,6 +76,7 @@ void WienerHeave::reset()
   newest_ = 0;
   decimated_.clear();
   since_design_ = 0.0;
+  since_manoeuvre_ = std::numeric_limits<double>::infinity();
   current_.reset();
   previous_.reset();
   fade_ = 1.0;
@@ -131,6 +132,7 @@ WienerHeaveOutput WienerHeave::update(double a, double period, double noise_dens
       decimated_.erase(decimated_.begin(), decimated_.begin() + (decimated_.size() - most));
   }
   since_design_ += dt_;
+  since_manoeuvre_ += dt_;
   const double recorded = decimated_.size() * decimation_ * dt_;
   const double interval = recorded < kEarlyRecord ? kEarlyRedesignInterval : kRedesignInterval;
   const double first = current_ ? kRestartDesign : kFirstDesign;
@@ -387,12 +389,14 @@ void WienerHeave::design(double noise_density_squared)
   // zero frequency), more than the variance that averaging segments removes. A long vertical
   // record takes Burg's estimate, which needs no window: no lobe spreads a slow bias line over
   // the band's edge. Horizontally a manoeuvre's lines are the largest, and Welch's window says
-  // what the band owes them. A short vertical record whose window leaves its displacement peak
+  // what the band owes them: a horizontal record takes Burg's estimate only while its window
+  // holds no manoeuvre. A short vertical record whose window leaves its displacement peak
   // (or none) within kResolvedCycles cycles of zero frequency takes Burg's estimate too, of order
   // kShortOrder times its length: a swell a window cannot resolve yet (a line it resolves, Burg's
   // model of a short record splits and moves).
   Statistics fit;
-  if (vertical_ && n >= 2 * kSegment)
+  const bool manoeuvre = since_manoeuvre_ <= n * decimation_ * dt_;
+  if ((vertical_ || !manoeuvre) && n >= 2 * kSegment)
     fit = statistics(burg(kMaxOrder, mean), {}, noise_density_squared, false);
   else
   {

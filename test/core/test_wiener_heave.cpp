@@ -97,9 +97,10 @@ struct Errors
 
 /// Runs `duration` s at `rate` with white noise of density 0.004 m/s^2/sqrt(Hz), a constant bias,
 /// a bias random walk and a periodic bias of `periodic` m/s^2 at a 240 s period; errors counted
-/// from `settle` s on. `vertical`: WienerHeave's vertical axis.
+/// from `settle` s on. `vertical`: WienerHeave's vertical axis; `manoeuvring`: a horizontal
+/// axis whose record always holds a manoeuvre (Welch's estimate alone).
 Errors run(const Sea* sea, double rate, double duration, double random_walk, double settle, unsigned seed,
-           bool vertical = false, double periodic = 0.0)
+           bool vertical = false, double periodic = 0.0, bool manoeuvring = false)
 {
   std::mt19937_64 rng(seed);
   std::normal_distribution<double> normal(0.0, 1.0);
@@ -116,6 +117,8 @@ Errors run(const Sea* sea, double rate, double duration, double random_walk, dou
       sea->at(t, &x, &v, &a);
     walk += random_walk * std::sqrt(1.0 / rate) * normal(rng);
     const double measured = a + 0.05 + walk + periodic * std::sin(2.0 * M_PI * t / 240.0) + sigma * normal(rng);
+    if (manoeuvring)
+      heave.noteManoeuvre();
     const WienerHeaveOutput out = heave.update(measured, 1.0 / rate, density * density);
     const double fixed_position = fixed.update(measured, 1.0 / rate).position;
     if (!out.valid)
@@ -158,15 +161,18 @@ TEST(WienerHeave, BroadSeasWithBiasWander)
 
 // The vertical axis's long records take Burg's estimate: on the same seas with a slow periodic
 // bias (0.04 m/s^2 at 240 s, below the band) besides the walk, its displacement error from 5 to
-// 15 min is under Welch's on the swell and within a tenth of it on the wind sea, and within
-// the limits above.
+// 15 min is under Welch's (a horizontal record holding a manoeuvre) on the swell and within a
+// tenth of it on the wind sea, and within the limits above. A horizontal record without a
+// manoeuvre takes the same estimate: the same error, to the last bit.
 TEST(WienerHeave, VerticalLongRecordsByBurg)
 {
   const Sea wind(1.0 / 8.0, 1.8, 3), swell(1.0 / 15.0, 3.5, 4);
   for (const Sea* sea : { &wind, &swell })
   {
     const Errors burg = run(sea, 50.0, 900.0, 6e-4, 300.0, 7, true, 0.04);
-    const Errors welch = run(sea, 50.0, 900.0, 6e-4, 300.0, 7, false, 0.04);
+    const Errors welch = run(sea, 50.0, 900.0, 6e-4, 300.0, 7, false, 0.04, true);
+    const Errors quiet = run(sea, 50.0, 900.0, 6e-4, 300.0, 7, false, 0.04);
+    EXPECT_EQ(quiet.position, burg.position) << "a horizontal record without a manoeuvre";
     std::printf("[%s] displacement error %.3f (Welch %.3f), velocity %.3f of the RMS\n",
                 sea == &wind ? "wind sea" : "swell", burg.position, welch.position, burg.velocity);
     EXPECT_LT(burg.position, sea == &wind ? 0.15 : 0.25);
@@ -176,6 +182,44 @@ TEST(WienerHeave, VerticalLongRecordsByBurg)
     else
       EXPECT_LT(burg.position, 1.1 * welch.position);
   }
+}
+
+// A horizontal record takes Burg's estimate only while its design window holds no manoeuvre: one
+// noted at 300 s gives the designs of the next kDesignWindow the outputs of a record that holds
+// one throughout, exactly, and once the window has passed it the outputs differ again.
+TEST(WienerHeave, HorizontalRecordsWithAManoeuvreKeepWelch)
+{
+  const Sea swell(1.0 / 15.0, 3.5, 4);
+  const double rate = 20.0, sigma = 0.004 * std::sqrt(rate / 2.0);
+  std::mt19937_64 rng(5);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  WienerHeave noted(0.03), manoeuvring(0.03);
+  long compared = 0, equal = 0;
+  bool differs_before = false, differs_after = false;
+  const double at = 300.0, window = WienerHeave::kDesignWindow;
+  for (long i = 0; i < static_cast<long>((at + window + 200.0) * rate); ++i)
+  {
+    const double t = i / rate;
+    double x, v, a;
+    swell.at(t, &x, &v, &a);
+    a += 0.05 + sigma * normal(rng);
+    if (i == static_cast<long>(at * rate))
+      noted.noteManoeuvre();
+    manoeuvring.noteManoeuvre();
+    const WienerHeaveOutput p = noted.update(a, 1.0 / rate, 1e-5), q = manoeuvring.update(a, 1.0 / rate, 1e-5);
+    if (t > 2.0 * WienerHeave::kSegment * WienerHeave::kDesignPeriod + 10.0 && t < at)
+      differs_before |= p.position != q.position;
+    if (t > at + 40.0 && t < at + window - 10.0)
+    {
+      ++compared;
+      equal += p.position == q.position ? 1 : 0;
+    }
+    if (t > at + window + WienerHeave::kRedesignInterval + 10.0)
+      differs_after |= p.position != q.position;
+  }
+  EXPECT_TRUE(differs_before) << "a long record without a manoeuvre";
+  EXPECT_EQ(equal, compared);
+  EXPECT_TRUE(differs_after) << "once the window has passed the manoeuvre";
 }
 
 // The first minutes: designs from records of 50 s to 4 min take each record as one segment
@@ -198,7 +242,8 @@ TEST(WienerHeave, ShortRecordsResolveASwell)
 // cannot resolve the displacement's peak from zero frequency. A 15 s swell (a narrow
 // Gaussian spectrum) under a 5.5 s wind sea, with the walk and the slow periodic bias, on two
 // seas whose swell is there from the start: from 20 to 60 s the displacement error is below the
-// horizontal axis's (Welch alone, from 20 s) on each, and by more than a tenth over both.
+// horizontal axis's (Welch alone, from 20 s, a record holding a manoeuvre) on each, and by more
+// than a tenth over both.
 TEST(WienerHeave, VerticalFirstMinuteByBurg)
 {
   double burg2 = 0.0, welch2 = 0.0;
@@ -206,7 +251,7 @@ TEST(WienerHeave, VerticalFirstMinuteByBurg)
   {
     const Sea sea = Sea::swell(1.0 / 15.0, 2.0, seed, 0.07) + Sea(1.0 / 5.5, 1.2, seed + 1);
     const Errors burg = run(&sea, 50.0, 60.0, 6e-4, 20.0, 7, true, 0.04);
-    const Errors welch = run(&sea, 50.0, 60.0, 6e-4, 20.0, 7, false, 0.04);
+    const Errors welch = run(&sea, 50.0, 60.0, 6e-4, 20.0, 7, false, 0.04, true);
     std::printf("[sea %u] displacement error from 20 to 60 s %.3f of the RMS (Welch %.3f)\n", seed, burg.position,
                 welch.position);
     EXPECT_LT(burg.position, 0.7) << "sea " << seed;

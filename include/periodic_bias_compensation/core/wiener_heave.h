@@ -37,6 +37,7 @@
 // Threading: not thread-safe; the owner serialises calls.
 #pragma once
 
+#include <limits>
 #include <memory>
 #include <vector>
 
@@ -89,7 +90,9 @@ public:
   static constexpr double kEdgeResolution = 0.5;
 
   /// min_frequency [Hz]: the lowest wave frequency; below it nothing is heave. `vertical`: the
-  /// record holds no manoeuvre, and Burg's estimate serves its long records.
+  /// record holds no manoeuvre, and Burg's estimate serves its long records and the short ones a
+  /// window cannot resolve; a horizontal axis's long records take it while they hold no manoeuvre
+  /// (noteManoeuvre()).
   explicit WienerHeave(double min_frequency = 0.04, bool vertical = false);
 
   /// Forgets everything; the next sample starts a new record.
@@ -98,6 +101,14 @@ public:
   /// spectrum is measured anew from the next sample. The last design stays applied but is marked
   /// stale (`valid` false) until the first design from the new record, kRestartDesign of it.
   void restartRecord();
+  /// A horizontal axis's record holds a manoeuvre from now on (a turn, or the axis blocked):
+  /// designs whose window reaches back to it take Welch's estimate, which says what the band owes
+  /// the manoeuvre's lines below it (an autoregressive model's peaks fall off too slowly beside
+  /// them).
+  void noteManoeuvre()
+  {
+    since_manoeuvre_ = 0.0;
+  }
   void setMinFrequency(double min_frequency);
 
   /// Takes the vertical acceleration a [m/s^2] (gravity removed), the sample period [s] as the
@@ -185,6 +196,8 @@ private:
   // Design-rate values, oldest first, at most kDesignWindow.
   std::vector<double> decimated_;
   double since_design_ = 0.0;
+  /// Data since noteManoeuvre() [s] (infinite: none since reset()).
+  double since_manoeuvre_ = std::numeric_limits<double>::infinity();
   bool stale_ = false;  ///< the design is from a record restartRecord() ended
   // Designs are never changed once made: copies of this object share them.
   std::shared_ptr<const Design> current_, previous_;
