@@ -320,7 +320,7 @@ WienerHeave::Statistics WienerHeave::statistics(std::vector<double> density, con
   };
   // On a short record, a displacement density that falls from the band's start is the skirt of a
   // line below it, not a sea: the band starts at the skirt's foot.
-  if (short_record && first > 0)
+  if (short_record)
   {
     int foot = first;
     while (foot + 1 < bins && displacement(foot) > 0.0 && displacement(foot + 1) <= displacement(foot))
@@ -395,15 +395,14 @@ void WienerHeave::design(double noise_density_squared)
   // kShortOrder times its length: a swell a window cannot resolve yet (a line it resolves, Burg's
   // model of a short record splits and moves).
   Statistics fit;
-  const bool manoeuvre = since_manoeuvre_ <= n * decimation_ * dt_;
-  if ((vertical_ || !manoeuvre) && n >= 2 * kSegment)
+  const double record = n * decimation_ * dt_;
+  if ((vertical_ || since_manoeuvre_ > record) && n >= 2 * kSegment)
     fit = statistics(burg(kMaxOrder, mean), {}, noise_density_squared, false);
   else
   {
     std::vector<double> response;
     std::vector<double> density = welch(n < 2 * kSegment ? n : kSegment, mean, &response);
     fit = statistics(std::move(density), response, noise_density_squared, false);
-    const double record = n * decimation_ * dt_;
     if (vertical_ && fit.peak_frequency * record < kResolvedCycles)
       fit = statistics(burg(std::min(kMaxOrder, static_cast<int>(kShortOrder * n)), mean), {}, noise_density_squared,
                        true);

@@ -15,7 +15,8 @@
 //     may owe through the window to the lines below min_frequency; on the vertical axis, once
 //     the record holds two segments, Burg's maximum-entropy estimate instead (an autoregressive
 //     model of kMaxOrder, with the white-noise floor under it), whose resolution separates a
-//     slow bias line from a swell without a window's main lobe, and on a shorter vertical record
+//     slow bias line from a swell without a window's main lobe (on a horizontal axis too while
+//     the window holds no manoeuvre, noteManoeuvre()), and on a shorter vertical record
 //     whose window cannot resolve its displacement peak from zero frequency (a swell in the
 //     first minute) Burg's estimate of order kShortOrder times its length, its band started
 //     kEdgeResolution / T above min_frequency and above the skirt of a line below; the wave
