@@ -20,22 +20,9 @@ namespace
 struct Sea
 {
   Sea(double fp, double hs, unsigned seed, int count = 120)
+    : Sea(0.6 * fp, (4.0 * fp - 0.6 * fp) / count, count, hs, seed,
+          [fp](double f) { return std::pow(f, -5.0) * std::exp(-1.25 * std::pow(fp / f, 4.0)); })
   {
-    std::mt19937_64 rng(seed);
-    std::uniform_real_distribution<double> u(0.0, 1.0);
-    const double lo = 0.6 * fp, hi = 4.0 * fp, df = (hi - lo) / count;
-    double m0 = 0.0;
-    for (int k = 0; k < count; ++k)
-    {
-      const double f = lo + (k + u(rng)) * df;
-      const double s = std::pow(f, -5.0) * std::exp(-1.25 * std::pow(fp / f, 4.0));
-      frequency.push_back(f);
-      amplitude.push_back(s * df);
-      phase.push_back(2.0 * M_PI * u(rng));
-      m0 += s * df;
-    }
-    for (double& a : amplitude)
-      a = std::sqrt(2.0 * a * hs * hs / 16.0 / m0);
   }
   /// Displacement, velocity and acceleration at t.
   void at(double t, double* x, double* v, double* a) const
@@ -53,23 +40,8 @@ struct Sea
   /// fp, significant height hs.
   static Sea swell(double fp, double hs, unsigned seed, double width, int count = 60)
   {
-    Sea sea;
-    std::mt19937_64 rng(seed);
-    std::uniform_real_distribution<double> u(0.0, 1.0);
-    const double lo = (1.0 - 3.0 * width) * fp, df = 6.0 * width * fp / count;
-    double m0 = 0.0;
-    for (int k = 0; k < count; ++k)
-    {
-      const double f = lo + (k + u(rng)) * df;
-      const double s = std::exp(-0.5 * std::pow((f - fp) / (width * fp), 2.0));
-      sea.frequency.push_back(f);
-      sea.amplitude.push_back(s * df);
-      sea.phase.push_back(2.0 * M_PI * u(rng));
-      m0 += s * df;
-    }
-    for (double& a : sea.amplitude)
-      a = std::sqrt(2.0 * a * hs * hs / 16.0 / m0);
-    return sea;
+    return Sea((1.0 - 3.0 * width) * fp, 6.0 * width * fp / count, count, hs, seed,
+               [fp, width](double f) { return std::exp(-0.5 * std::pow((f - fp) / (width * fp), 2.0)); });
   }
   /// This sea and `other` together.
   Sea operator+(const Sea& other) const
@@ -83,7 +55,26 @@ struct Sea
   std::vector<double> frequency, amplitude, phase;
 
 private:
-  Sea() = default;
+  /// `count` components, one at random in each of the bins of width df from lo, their amplitudes
+  /// from the spectrum's `shape` scaled to significant height hs, random phases.
+  template <typename Shape>
+  Sea(double lo, double df, int count, double hs, unsigned seed, Shape shape)
+  {
+    std::mt19937_64 rng(seed);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    double m0 = 0.0;
+    for (int k = 0; k < count; ++k)
+    {
+      const double f = lo + (k + u(rng)) * df;
+      const double s = shape(f);
+      frequency.push_back(f);
+      amplitude.push_back(s * df);
+      phase.push_back(2.0 * M_PI * u(rng));
+      m0 += s * df;
+    }
+    for (double& a : amplitude)
+      a = std::sqrt(2.0 * a * hs * hs / 16.0 / m0);
+  }
 };
 
 struct Errors
