@@ -10,14 +10,13 @@ import json
 import os
 import re
 import sys
-import time
 import unittest
-import xml.etree.ElementTree as ET
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 REPO = os.path.dirname(os.path.dirname(HERE))
 sys.path.insert(0, HERE)
 import bench_render  # noqa: E402
+import pyunit_main  # noqa: E402
 from bench_tables import table_lines  # noqa: E402
 
 with open(os.path.join(HERE, 'fixtures', 'results_small.json')) as f:
@@ -165,27 +164,5 @@ class RenderTest(unittest.TestCase):
         self.assertEqual(bench_render.kept_section('# Benchmarks\n'), '')
 
 
-def xunit(result, tests, seconds, path):
-    """JUnit XML for catkin_test_results."""
-    suite = ET.Element('testsuite', name='test_bench_render', tests=str(tests), errors=str(len(result.errors)),
-                       failures=str(len(result.failures)), skipped='0', time='%.3f' % seconds)
-    bad = {t.id(): ('error', m) for t, m in result.errors}
-    bad.update({t.id(): ('failure', m) for t, m in result.failures})
-    for test in unittest.defaultTestLoader.loadTestsFromTestCase(RenderTest):
-        case = ET.SubElement(suite, 'testcase', classname='RenderTest', name=test.id().rsplit('.', 1)[1],
-                             time='0')
-        if test.id() in bad:
-            kind, message = bad[test.id()]
-            ET.SubElement(case, kind, message=message.strip().split('\n')[-1]).text = message
-    ET.ElementTree(suite).write(path, encoding='utf-8', xml_declaration=True)
-
-
 if __name__ == '__main__':
-    path = sys.argv[sys.argv.index('--xunit') + 1] if '--xunit' in sys.argv else None
-    suite = unittest.defaultTestLoader.loadTestsFromTestCase(RenderTest)
-    start = time.time()
-    result = unittest.TextTestRunner(verbosity=2).run(suite)
-    if path:
-        os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
-        xunit(result, suite.countTestCases(), time.time() - start, path)
-    sys.exit(0 if result.wasSuccessful() else 1)
+    pyunit_main.main(RenderTest)
