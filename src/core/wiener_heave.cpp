@@ -277,10 +277,9 @@ std::vector<double> WienerHeave::burg(int order, double mean) const
   return density;
 }
 
-WienerHeave::Statistics WienerHeave::statistics(std::vector<double> density, const std::vector<double>& response,
-                                                double noise_density_squared, bool short_record) const
+WienerHeave::Wave WienerHeave::wave(std::vector<double> density, const std::vector<double>& response,
+                                    double noise_density_squared, Estimate kind) const
 {
-  RealFft& fft = *transform_.fft;
   const double fs = 1.0 / (decimation_ * dt_);
   const int bins = kDftSize / 2 + 1;
 
@@ -292,10 +291,14 @@ WienerHeave::Statistics WienerHeave::statistics(std::vector<double> density, con
   // A short record's autoregressive model cannot tell a line below the band from the band's first
   // kEdgeResolution / T (T the record's length): the band starts that much higher.
   const double record = static_cast<double>(decimated_.size()) / fs;
-  const int first = short_record
+  const int first = kind == Estimate::kShortBurg
                         ? std::min(bins, static_cast<int>(std::ceil((min_frequency_ + kEdgeResolution / record) / df)))
                         : below;
-  std::vector<double> wave(bins, 0.0), gain(bins, 0.0);
+  Wave out;
+  out.wave.assign(bins, 0.0);
+  out.gain.assign(bins, 0.0);
+  std::vector<double>& wave = out.wave;
+  std::vector<double>& gain = out.gain;
   for (int k = 1; k < bins; ++k)
   {
     const double half = M_PI * k * df * dt_;
@@ -303,12 +306,12 @@ WienerHeave::Statistics WienerHeave::statistics(std::vector<double> density, con
     gain[k] = ratio * ratio;
     // An autoregressive model of a record holds lines with next to no power between them; the
     // sensor's white noise is there all the same (and keeps the normal equations well posed).
-    if (response.empty())
+    if (kind != Estimate::kWelch)
       density[k] = std::max(density[k], floor * gain[k] * gain[k]);
     if (k >= first && gain[k] > 1e-6)
     {
       double leak = 0.0;
-      if (!response.empty())
+      if (kind == Estimate::kWelch)
         for (int j = 0; j < below; ++j)
           leak += density[j] * response[k - j];
       wave[k] = std::max(0.0, density[k] - kNoiseMargin * (floor * gain[k] * gain[k] + leak)) / (gain[k] * gain[k]);
@@ -320,7 +323,7 @@ WienerHeave::Statistics WienerHeave::statistics(std::vector<double> density, con
   };
   // On a short record, a displacement density that falls from the band's start is the skirt of a
   // line below it, not a sea: the band starts at the skirt's foot.
-  if (short_record)
+  if (kind == Estimate::kShortBurg)
   {
     int foot = first;
     while (foot + 1 < bins && displacement(foot) > 0.0 && displacement(foot + 1) <= displacement(foot))
@@ -328,17 +331,10 @@ WienerHeave::Statistics WienerHeave::statistics(std::vector<double> density, con
     if (foot > first)
       std::fill(wave.begin(), wave.begin() + foot, 0.0);
   }
-
-  // The cross-spectrum E[x a_d*] of displacement and low-passed acceleration; the low-pass's
-  // response AA (two moving averages of D samples at dt).
-  std::vector<std::complex<double>> cross(bins);
-  Statistics out;
   double peak = 0.0;
   for (int k = 1; k < bins; ++k)
   {
     const double f = k * df, omega = 2.0 * M_PI * f;
-    const std::complex<double> aa = gain[k] * std::polar(1.0, -omega * (decimation_ - 1) * dt_);
-    cross[k] = -std::conj(aa) * wave[k] / (omega * omega);
     out.displacement_variance += 2.0 * displacement(k) * df;
     out.velocity_variance += 2.0 * displacement(k) * omega * omega * df;
     if (displacement(k) > peak)
@@ -347,15 +343,35 @@ WienerHeave::Statistics WienerHeave::statistics(std::vector<double> density, con
       out.peak_frequency = f;
     }
   }
-  if (!(peak > 0.0))
+  out.density = std::move(density);
+  return out;
+}
+
+WienerHeave::Statistics WienerHeave::statistics(const Wave& w) const
+{
+  Statistics out;
+  if (!(w.peak_frequency > 0.0))
     return out;  // no wave in the spectrum
-  const double span = std::clamp(kSpanPeriods / out.peak_frequency, kMinSpan, kMaxSpan);
+  RealFft& fft = *transform_.fft;
+  const double fs = 1.0 / (decimation_ * dt_);
+  const int bins = kDftSize / 2 + 1;
+  const double df = fs / kDftSize;
+  const double span = std::clamp(kSpanPeriods / w.peak_frequency, kMinSpan, kMaxSpan);
   // No longer than the input held since reset() (less the low-pass's start): beyond it the FIR
   // would read the history's zeros, not the sea.
   const int held = static_cast<int>(samples_ / decimation_) - 2;
   const int taps =
       std::max(1, std::min({ static_cast<int>(std::lround(span * fs)), kDftSize / 2, held, ring_length_ }));
 
+  // The cross-spectrum E[x a_d*] of displacement and low-passed acceleration; the low-pass's
+  // response AA (two moving averages of D samples at dt).
+  std::vector<std::complex<double>> cross(bins);
+  for (int k = 1; k < bins; ++k)
+  {
+    const double f = k * df, omega = 2.0 * M_PI * f;
+    const std::complex<double> aa = w.gain[k] * std::polar(1.0, -omega * (decimation_ - 1) * dt_);
+    cross[k] = -std::conj(aa) * w.wave[k] / (omega * omega);
+  }
   // Correlations at lags 0..taps-1: the inverse transforms of the (Hermitian) spectra, the
   // velocity's cross-spectrum j omega times the displacement's.
   const auto correlation = [&](auto spectrum) {
@@ -368,7 +384,7 @@ WienerHeave::Statistics WienerHeave::statistics(std::vector<double> density, con
     fft.inverse();
     return std::vector<double>(fft.in, fft.in + taps);
   };
-  out.autocorrelation = correlation([&](int k) { return std::complex<double>(density[k] * df); });
+  out.autocorrelation = correlation([&](int k) { return std::complex<double>(w.density[k] * df); });
   out.r_position = correlation([&](int k) { return cross[k] * df; });
   out.r_velocity = correlation([&](int k) { return std::complex<double>(0.0, 2.0 * M_PI * k * df) * cross[k] * df; });
   return out;
@@ -394,19 +410,20 @@ void WienerHeave::design(double noise_density_squared)
   // (or none) within kResolvedCycles cycles of zero frequency takes Burg's estimate too, of order
   // kShortOrder times its length: a swell a window cannot resolve yet (a line it resolves, Burg's
   // model of a short record splits and moves).
-  Statistics fit;
+  Wave sea;
   const double record = n * decimation_ * dt_;
   if ((vertical_ || since_manoeuvre_ > record) && n >= 2 * kSegment)
-    fit = statistics(burg(kMaxOrder, mean), {}, noise_density_squared, false);
+    sea = wave(burg(kMaxOrder, mean), {}, noise_density_squared, Estimate::kBurg);
   else
   {
     std::vector<double> response;
     std::vector<double> density = welch(n < 2 * kSegment ? n : kSegment, mean, &response);
-    fit = statistics(std::move(density), response, noise_density_squared, false);
-    if (vertical_ && fit.peak_frequency * record < kResolvedCycles)
-      fit = statistics(burg(std::min(kMaxOrder, static_cast<int>(kShortOrder * n)), mean), {}, noise_density_squared,
-                       true);
+    sea = wave(std::move(density), response, noise_density_squared, Estimate::kWelch);
+    if (vertical_ && sea.peak_frequency * record < kResolvedCycles)
+      sea = wave(burg(std::min(kMaxOrder, static_cast<int>(kShortOrder * n)), mean), {}, noise_density_squared,
+                 Estimate::kShortBurg);
   }
+  const Statistics fit = statistics(sea);
   if (fit.autocorrelation.empty())
   {
     peak_frequency_ = 0.0;
@@ -425,7 +442,7 @@ void WienerHeave::design(double noise_density_squared)
   if (!solveToeplitz(fit.autocorrelation, fit.r_position, &next->position) ||
       !solveToeplitz(fit.autocorrelation, fit.r_velocity, &next->velocity))
     return;  // keep the last design, and its peak
-  peak_frequency_ = fit.peak_frequency;
+  peak_frequency_ = sea.peak_frequency;
   // The expected error E[(x - h a)^2] = var(x) - h r of taps solved from these statistics
   // (R h = r).
   double explained = 0.0, explained_velocity = 0.0;
@@ -434,9 +451,9 @@ void WienerHeave::design(double noise_density_squared)
     explained += next->position[i] * fit.r_position[i];
     explained_velocity += next->velocity[i] * fit.r_velocity[i];
   }
-  next->error_variance = std::max(0.0, fit.displacement_variance - explained);
-  next->wave_variance = fit.displacement_variance;
-  next->velocity_error_variance = std::max(0.0, fit.velocity_variance - explained_velocity);
+  next->error_variance = std::max(0.0, sea.displacement_variance - explained);
+  next->wave_variance = sea.displacement_variance;
+  next->velocity_error_variance = std::max(0.0, sea.velocity_variance - explained_velocity);
   next->mean = mean;
   previous_ = std::move(current_);
   current_ = std::move(next);

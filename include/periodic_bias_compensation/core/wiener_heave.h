@@ -152,17 +152,31 @@ private:
     double velocity_error_variance = 0.0;
     double wave_variance = 0.0;
   };
-  /// What a design takes from a spectrum estimate of the record (Welch, Hann segments of
-  /// `segment` design-rate values, half overlap): correlations at lags 0..taps-1 (taps: six
-  /// periods of the displacement's peak, kMinSpan..kMaxSpan), empty when it holds no wave.
+  /// How a density of the record was estimated, which decides what is taken as wave in it.
+  enum class Estimate
+  {
+    kWelch,     ///< Welch's: a bin less what it owes the lines below min_frequency through the window
+    kBurg,      ///< Burg's: no window; the white-noise floor is put under its density
+    kShortBurg  ///< Burg's of a short record: its band also starts kEdgeResolution / T above
+                ///< min_frequency and above the skirt of a line below it
+  };
+  /// The wave in a density estimate of the record.
+  struct Wave
+  {
+    std::vector<double> density;  ///< the estimate's two-sided density (the floor under Burg's)
+    std::vector<double> wave;     ///< wave acceleration density per bin (0 outside the band)
+    std::vector<double> gain;     ///< the low-pass's power response per bin
+    double displacement_variance = 0.0;
+    double velocity_variance = 0.0;
+    double peak_frequency = 0.0;  ///< of the displacement spectrum [Hz] (0: no wave)
+  };
+  /// What a design takes from the wave: correlations at lags 0..taps-1 (taps: six periods of the
+  /// displacement's peak, kMinSpan..kMaxSpan), empty when it holds no wave.
   struct Statistics
   {
     std::vector<double> autocorrelation;  ///< of the low-passed acceleration
     std::vector<double> r_position;       ///< of displacement with it
     std::vector<double> r_velocity;       ///< of velocity with it
-    double displacement_variance = 0.0;
-    double velocity_variance = 0.0;
-    double peak_frequency = 0.0;  ///< of the displacement spectrum [Hz] (0: no wave)
   };
   /// Two-sided density of the design-rate values less `mean` [(m/s^2)^2/Hz] at kDftSize / 2 + 1
   /// frequencies: Welch's with Hann segments of `segment` values, half overlap, and in
@@ -171,12 +185,12 @@ private:
   /// The same by Burg's method, an autoregressive model of `order` fitted to the whole record
   /// (no window).
   std::vector<double> burg(int order, double mean) const;
-  /// `response` empty: Burg's density, which owes nothing to the lines below min_frequency
-  /// through a window; the white-noise floor is put under it. `short_record`: Burg's density of a
-  /// short record, whose band starts kEdgeResolution / T above min_frequency and above the skirt
-  /// of a line below it.
-  Statistics statistics(std::vector<double> density, const std::vector<double>& response, double noise_density_squared,
-                        bool short_record) const;
+  /// The wave acceleration per bin of `density` (`response`: Welch's window response, kWelch
+  /// only): less kNoiseMargin times the white-noise floor, nothing below min_frequency, and what
+  /// `kind` takes off besides.
+  Wave wave(std::vector<double> density, const std::vector<double>& response, double noise_density_squared,
+            Estimate kind) const;
+  Statistics statistics(const Wave& wave) const;
   void design(double noise_density_squared);
   void apply(const Design& d, double* x, double* v) const;
 
