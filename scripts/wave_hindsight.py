@@ -10,7 +10,8 @@ a constant) is fitted by least squares to the axis's true wave motion on one hal
 whole record after --settle and scored from T0 to T1 s (the first minutes: what a FIR of a short
 span does once the spectrum is known). The FIR reads the axis's own acceleration (`own`) or all
 three (`all`: a multi-input filter, which gains where the axes move together, as a ship's or a
-buoy's do in a long-crested sea). No causal linear filter of that span and those inputs designed
+buoy's do in a long-crested sea; it has three times the coefficients, and a half of the record
+shorter than a few times their number overfits: a warning says so). No causal linear filter of that span and those inputs designed
 from the sensor alone does better on average; scenarios that share a sea (the same seed, a
 different sensor) show what the sensor's effects cost such a filter. Prints per scenario, axis and
 inputs the error in % of the true wave RMS and of Hs (4 x its standard deviation), to be set
@@ -81,15 +82,18 @@ def hindsight_error(inputs, truth, dt, settle, span, window=None):
         return int(np.ceil(seconds / (step * dt)))
 
     if window is not None:
-        fit, score = rows(index(settle), len(target)), rows(index(window[0]), index(window[1]))
-        h = np.linalg.lstsq(fit, target[max(taps, index(settle)):], rcond=None)[0]
+        later, early = rows(index(settle), len(target)), rows(index(window[0]), index(window[1]))
+        h = np.linalg.lstsq(later, target[max(taps, index(settle)):], rcond=None)[0]
         scored = target[max(taps, index(window[0])):index(window[1])]
-        error = scored - score @ h
+        error = scored - early @ h
         return float(np.mean(error ** 2) / np.mean(scored ** 2)), float(np.std(scored))
     first = max(taps, index(settle))
     design = rows(first, len(target))
     scored = target[first:]
     half = len(scored) // 2
+    if half < 4 * design.shape[1]:
+        print('wave_hindsight: %d values per half against %d coefficients: the fit overfits, the error reads '
+              'high; a longer --duration or a shorter --span' % (half, design.shape[1]), file=sys.stderr)
     ratios = []
     for fit, score in ((slice(0, half), slice(half, None)), (slice(half, None), slice(0, half))):
         h = np.linalg.lstsq(design[fit], scored[fit], rcond=None)[0]
@@ -114,10 +118,11 @@ def main():
     simulate = os.path.join(args.devel, 'simulate_imu')
     if not os.access(simulate, os.X_OK):
         sys.exit('wave_hindsight: no simulate_imu in %s' % args.devel)
-    axes = [AXES.index(a) for a in args.axes.replace(',', '') if a in AXES]
-    inputs = [i for i in args.inputs.split(',') if i in ('own', 'all')]
-    if not axes or not inputs or len(inputs) != len(args.inputs.split(',')):
-        sys.exit('wave_hindsight: --axes takes x, y, z; --inputs own, all')
+    axes = args.axes.replace(',', '')
+    inputs = args.inputs.split(',')
+    if not axes or set(axes) - set(AXES) or not set(inputs) <= {'own', 'all'}:
+        sys.exit('wave_hindsight: --axes takes x, y, z (e.g. xyz); --inputs own, all (e.g. own,all)')
+    axes = [AXES.index(a) for a in axes]
     scored = ('%g-%g' % tuple(args.window)) if args.window else 'after %g' % args.settle
     print('| scenario | axis | inputs | seeds | FIR span [s] | scored [s] | error [% of true wave RMS] | [% of Hs] |')
     print('|---|---|---|---|---|---|---|---|')
