@@ -31,7 +31,8 @@ import numpy as np
 import yaml
 from scipy import signal
 
-GRAVITY = 9.80665
+from bench_external import G as GRAVITY, quat_rotate
+
 AXES = 'xyz'
 
 
@@ -55,9 +56,8 @@ def level_acceleration(columns, arm):
     gyro = signal.sosfilt(signal.butter(2, min(5.0, 0.2 / dt), fs=1.0 / dt, output='sos'), gyro, axis=0)
     angular_acceleration = np.gradient(gyro, dt, axis=0)
     accel = accel - np.cross(angular_acceleration, arm) - np.cross(gyro, np.cross(gyro, arm))
-    w = columns['att_w'][:, None]
-    u = np.c_[columns['att_x'], columns['att_y'], columns['att_z']]
-    level = accel + 2 * np.cross(u, np.cross(u, accel) + w * accel)
+    attitude = np.c_[columns['att_w'], columns['att_x'], columns['att_y'], columns['att_z']]
+    level = quat_rotate(attitude, accel)
     level[:, 2] -= GRAVITY
     return level, dt
 
