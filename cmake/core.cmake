@@ -10,6 +10,7 @@ add_library(${PROJECT_NAME}_core
   src/core/time_base.cpp
   src/core/real_fft.cpp
   src/core/wiener_heave.cpp
+  src/core/toeplitz.cpp
   src/core/noise_floor.cpp
   src/core/lever_arm.cpp
   src/core/broadband_wave.cpp
@@ -41,6 +42,7 @@ if(CATKIN_ENABLE_TESTING)
     test/core/test_lever_arm.cpp
     test/core/test_time_base.cpp
     test/core/test_wiener_heave.cpp
+    test/core/test_toeplitz.cpp
     test/core/test_noise_floor.cpp
     test/core/test_broadband_wave.cpp
     test/core/test_wave_consistency.cpp

@@ -4,8 +4,11 @@
 
 namespace periodic_bias_compensation
 {
-BroadbandWave::BroadbandWave(bool vertical, double corner_frequency, double min_frequency)
-  : vertical_(vertical), min_frequency_(min_frequency), spectral_(kBandEdge * min_frequency, vertical)
+BroadbandWave::BroadbandWave(bool vertical, double corner_frequency, double min_frequency, bool companions)
+  : vertical_(vertical),
+    min_frequency_(min_frequency),
+    companions_(companions),
+    spectral_(kBandEdge * min_frequency, vertical, companions)
 {
   configure(corner_frequency, min_frequency);
 }
@@ -57,10 +60,13 @@ BroadbandWaveOutput BroadbandWave::update(const BroadbandWaveInput& in)
   const double density = noiseDensitySquared(in.rate);
   if (in.turning && vertical_)
     spectral_.restartRecord();
+  // A turn, or horizontal axes that may not be read: a manoeuvre in the horizontal records (the
+  // vertical one begins anew at a turn, its companions with it).
   if (!vertical_ && (in.turning || !in.allowed))
     spectral_.noteManoeuvre();
-  const WienerHeaveOutput spectral =
-      spectral_.update(in.offset_free, in.rate_settled && in.rate > 0.0 ? 1.0 / in.rate : 0.0, density);
+  const double period = in.rate_settled && in.rate > 0.0 ? 1.0 / in.rate : 0.0;
+  const WienerHeaveOutput spectral = companions_ ? spectral_.update(in.offset_free, period, density, in.companions)
+                                                 : spectral_.update(in.offset_free, period, density);
   if (dt > 0.0)
     spectral_share_ +=
         (1.0 - std::exp(-dt / WienerHeave::kDesignFade)) * ((spectral.valid ? 1.0 : 0.0) - spectral_share_);

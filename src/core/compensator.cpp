@@ -514,7 +514,7 @@ private:
       axis.drift.restartMotion();
       axis.slow_start = now_;
       axis.residual_variance = 0.0;
-      axis.broadband = BroadbandWave(&axis == &axes_[2], config_.heave_corner_frequency, config_.min_frequency);
+      axis.broadband = BroadbandWave(&axis == &axes_[2], config_.heave_corner_frequency, config_.min_frequency, true);
       axis.consistency = WaveConsistency(config_.min_frequency);
       axis.paper.reset();
       axis.d_v = axis.d_p = 0.0;
@@ -626,6 +626,7 @@ private:
     out.orientation = s.has_orientation ? s.orientation : leveller_.level();
     const LeverArmOutput lever = lever_.update(out.orientation, dt);
     const Vector3 a = levelAcceleration(s);
+    level_ = a;
     turns_.update(headingOf(out.orientation), (out.orientation * s.angular_rate).z(), dt, s.has_orientation);
 
     // Until the window ends the bias is provisional: the running mean of the level acceleration.
@@ -753,6 +754,10 @@ private:
     // The measured acceleration less the calibrated offset (fixed once calibrated, so no loop with
     // the drift observer): gravity mismatch and bias are no step into the filters at their start.
     in.offset_free = offsetFree(raw, i);
+    // The other axes, in the order x, y, z: every axis moves with the same sea.
+    for (int j = 0, c = 0; j < 3; ++j)
+      if (j != i)
+        in.companions[c++] = offsetFree(level_[j], j);
     in.residual = residual;
     in.harmonic_position = *wave_x;
     in.locked = axis.locked;
@@ -892,8 +897,9 @@ private:
   double planned_rate_ = 0.0;                      ///< rate the FFT windows were planned for [Hz]
   int hop_samples_ = 1;
   int since_analysis_ = 0;
-  double now_ = 0.0;    ///< time of the sample being processed [s]
-  TurnDetector turns_;  ///< turns told from the yaw a sea induces (wave estimate)
+  double now_ = 0.0;                 ///< time of the sample being processed [s]
+  Vector3 level_ = Vector3::Zero();  ///< its level acceleration [m/s^2]
+  TurnDetector turns_;               ///< turns told from the yaw a sea induces (wave estimate)
 
   Leveller leveller_;
   LeverArm lever_;  ///< the IMU's offset taken off the wave outputs

@@ -5,52 +5,13 @@
 #include <complex>
 #include <stdexcept>
 
+#include "periodic_bias_compensation/core/toeplitz.h"
 #include "real_fft.h"
 
 namespace periodic_bias_compensation
 {
-namespace
-{
-/// Solves T x = b for the symmetric Toeplitz T with first column t (Levinson recursion, O(n^2)).
-/// Returns false when T is not positive definite to working precision.
-bool solveToeplitz(const std::vector<double>& t, const std::vector<double>& b, std::vector<double>* x)
-{
-  const int n = static_cast<int>(t.size());
-  if (n == 0 || !(t[0] > 0.0))
-    return false;
-  std::vector<double> forward(n, 0.0), next(n, 0.0);
-  x->assign(n, 0.0);
-  forward[0] = 1.0 / t[0];
-  (*x)[0] = b[0] / t[0];
-  for (int m = 1; m < n; ++m)
-  {
-    // Error of the forward vector extended by a zero; the backward vector is its reverse.
-    double e = 0.0;
-    for (int i = 0; i < m; ++i)
-      e += t[m - i] * forward[i];
-    const double denominator = 1.0 - e * e;
-    if (!(denominator > 1e-12))
-      return false;
-    for (int i = 0; i <= m; ++i)
-    {
-      const double f = i < m ? forward[i] : 0.0;
-      const double g = i > 0 ? forward[m - i] : 0.0;
-      next[i] = (f - e * g) / denominator;
-    }
-    std::copy(next.begin(), next.begin() + m + 1, forward.begin());
-    double ex = 0.0;
-    for (int i = 0; i < m; ++i)
-      ex += t[m - i] * (*x)[i];
-    const double correction = b[m] - ex;
-    // Backward vector: forward reversed.
-    for (int i = 0; i <= m; ++i)
-      (*x)[i] += correction * forward[m - i];
-  }
-  return true;
-}
-}  // namespace
-
-WienerHeave::WienerHeave(double min_frequency, bool vertical) : min_frequency_(min_frequency), vertical_(vertical)
+WienerHeave::WienerHeave(double min_frequency, bool vertical, bool companions)
+  : min_frequency_(min_frequency), vertical_(vertical), channels_used_(companions ? kChannels : 1)
 {
   setMinFrequency(min_frequency);
 }
@@ -67,16 +28,12 @@ void WienerHeave::reset()
 {
   dt_ = sized_dt_ = 0.0;
   decimation_ = 0;
-  first_.clear();
-  second_.clear();
-  first_sum_ = second_sum_ = 0.0;
   samples_ = 0;
-  history_.clear();
+  channels_ = {};
   ring_length_ = 0;
   newest_ = 0;
-  decimated_.clear();
   since_design_ = 0.0;
-  since_manoeuvre_ = std::numeric_limits<double>::infinity();
+  since_manoeuvre_ = since_gap_ = std::numeric_limits<double>::infinity();
   current_.reset();
   previous_.reset();
   fade_ = 1.0;
@@ -86,12 +43,24 @@ void WienerHeave::reset()
 
 void WienerHeave::restartRecord()
 {
-  decimated_.clear();
+  for (Channel& channel : channels_)
+    channel.decimated.clear();
   since_design_ = 0.0;
   stale_ = current_ != nullptr;
 }
 
 WienerHeaveOutput WienerHeave::update(double a, double period, double noise_density_squared)
+{
+  return step(a, period, noise_density_squared, nullptr);
+}
+
+WienerHeaveOutput WienerHeave::update(double a, double period, double noise_density_squared,
+                                      const Companions& companions)
+{
+  return step(a, period, noise_density_squared, &companions);
+}
+
+WienerHeaveOutput WienerHeave::step(double a, double period, double noise_density_squared, const Companions* companions)
 {
   WienerHeaveOutput out;
   // Periods outside kMinPeriod..kMaxPeriod (not known yet, a glitch, not an IMU) would size the
@@ -105,39 +74,60 @@ WienerHeaveOutput WienerHeave::update(double a, double period, double noise_dens
   {
     sized_dt_ = period;
     decimation_ = std::max(1, static_cast<int>(std::lround(kDesignPeriod / dt_)));
-    first_.assign(decimation_, 0.0);
-    second_.assign(decimation_, 0.0);
     ring_length_ = static_cast<int>(std::ceil(kMaxSpan / (decimation_ * dt_)));
-    history_.assign(static_cast<size_t>(ring_length_) * decimation_, 0.0);
+    for (int c = 0; c < channels_used_; ++c)
+    {
+      channels_[c].first.assign(decimation_, 0.0);
+      channels_[c].second.assign(decimation_, 0.0);
+      channels_[c].history.assign(static_cast<size_t>(ring_length_) * decimation_, 0.0);
+    }
+  }
+  std::array<double, kChannels> input{ a, 0.0, 0.0 };
+  if (channels_used_ > 1)
+  {
+    if (companions && std::isfinite((*companions)[0]) && std::isfinite((*companions)[1]))
+      std::copy(companions->begin(), companions->end(), input.begin() + 1);
+    else
+      since_gap_ = 0.0;
   }
   // Two moving averages (running sums over circular buffers of decimation_ values).
   const int slot = static_cast<int>(samples_ % decimation_);
-  first_sum_ += a - first_[slot];
-  first_[slot] = a;
-  const double once = first_sum_ / decimation_;
-  second_sum_ += once - second_[slot];
-  second_[slot] = once;
-  const double low = second_sum_ / decimation_;
   // Sample m goes to ring m mod D, place (m / D) mod ring_length_.
   newest_ = static_cast<int>(slot * ring_length_ + (samples_ / decimation_) % ring_length_);
-  history_[newest_] = low;
+  std::array<double, kChannels> low{};
+  for (int c = 0; c < channels_used_; ++c)
+  {
+    Channel& channel = channels_[c];
+    channel.first_sum += input[c] - channel.first[slot];
+    channel.first[slot] = input[c];
+    const double once = channel.first_sum / decimation_;
+    channel.second_sum += once - channel.second[slot];
+    channel.second[slot] = once;
+    low[c] = channel.second_sum / decimation_;
+    channel.history[newest_] = low[c];
+  }
   ++samples_;
   if (samples_ < 2 * decimation_)
     return out;  // the averages are not full yet
   if (samples_ % decimation_ == 0)
   {
-    decimated_.push_back(low);
     const size_t most = static_cast<size_t>(kDesignWindow / (decimation_ * dt_));
-    if (decimated_.size() > most)
-      decimated_.erase(decimated_.begin(), decimated_.begin() + (decimated_.size() - most));
+    for (int c = 0; c < channels_used_; ++c)
+    {
+      std::vector<double>& decimated = channels_[c].decimated;
+      decimated.push_back(low[c]);
+      if (decimated.size() > most)
+        decimated.erase(decimated.begin(), decimated.begin() + (decimated.size() - most));
+    }
   }
   since_design_ += dt_;
   since_manoeuvre_ += dt_;
-  const double recorded = decimated_.size() * decimation_ * dt_;
+  since_gap_ += dt_;
+  const double recorded = record().size() * decimation_ * dt_;
   const double interval = recorded < kEarlyRecord ? kEarlyRedesignInterval : kRedesignInterval;
   const double first = current_ ? kRestartDesign : kFirstDesign;
   if ((current_ && !stale_ ? since_design_ >= interval : recorded >= first) &&
-      static_cast<int>(decimated_.size()) >= kMinSegment)
+      static_cast<int>(record().size()) >= kMinSegment)
   {
     design(noise_density_squared);
     since_design_ = 0.0;
@@ -166,41 +156,47 @@ void WienerHeave::apply(const Design& d, double* x, double* v) const
 {
   // The values D samples apart ending at the newest lie next to each other in its ring,
   // newest last: walked backwards from the newest to the ring's start, then from its end.
-  const double* ring = history_.data() + (newest_ / ring_length_) * ring_length_;
-  const int taps = static_cast<int>(d.position.size());
   const int place = newest_ % ring_length_;
-  const int before_wrap = std::min(taps, place + 1);
-  // Four partial sums each: four independent chains of additions instead of one.
-  double px[4] = { 0.0, 0.0, 0.0, 0.0 }, pv[4] = { 0.0, 0.0, 0.0, 0.0 };
-  const double* position = d.position.data();
-  const double* velocity = d.velocity.data();
-  auto accumulate = [&](const double* newest, int first_tap, int end_tap) {
-    const double* value = newest + first_tap;  // value[-k]: tap k's input
-    int k = first_tap;
-    for (; k + 4 <= end_tap; k += 4)
-      for (int j = 0; j < 4; ++j)
+  *x = *v = 0.0;
+  for (int c = 0; c < kChannels && !d.position[c].empty(); ++c)
+  {
+    const double* ring = channels_[c].history.data() + (newest_ / ring_length_) * ring_length_;
+    const int taps = static_cast<int>(d.position[c].size());
+    const int before_wrap = std::min(taps, place + 1);
+    // Four partial sums each: four independent chains of additions instead of one.
+    double px[4] = { 0.0, 0.0, 0.0, 0.0 }, pv[4] = { 0.0, 0.0, 0.0, 0.0 };
+    const double* position = d.position[c].data();
+    const double* velocity = d.velocity[c].data();
+    const double mean = d.mean[c];
+    auto accumulate = [&](const double* newest, int first_tap, int end_tap) {
+      const double* value = newest + first_tap;  // value[-k]: tap k's input
+      int k = first_tap;
+      for (; k + 4 <= end_tap; k += 4)
+        for (int j = 0; j < 4; ++j)
+        {
+          const double centred = value[-(k + j)] - mean;
+          px[j] += position[k + j] * centred;
+          pv[j] += velocity[k + j] * centred;
+        }
+      for (; k < end_tap; ++k)
       {
-        const double centred = value[-(k + j)] - d.mean;
-        px[j] += position[k + j] * centred;
-        pv[j] += velocity[k + j] * centred;
+        const double centred = value[-k] - mean;
+        px[0] += position[k] * centred;
+        pv[0] += velocity[k] * centred;
       }
-    for (; k < end_tap; ++k)
-    {
-      const double centred = value[-k] - d.mean;
-      px[0] += position[k] * centred;
-      pv[0] += velocity[k] * centred;
-    }
-  };
-  accumulate(ring + place, 0, before_wrap);
-  accumulate(ring + ring_length_ - 1, before_wrap, taps);
-  *x = (px[0] + px[1]) + (px[2] + px[3]);
-  *v = (pv[0] + pv[1]) + (pv[2] + pv[3]);
+    };
+    accumulate(ring + place, 0, before_wrap);
+    accumulate(ring + ring_length_ - 1, before_wrap, taps);
+    *x += (px[0] + px[1]) + (px[2] + px[3]);
+    *v += (pv[0] + pv[1]) + (pv[2] + pv[3]);
+  }
 }
 
 std::vector<double> WienerHeave::welch(int segment, double mean, std::vector<double>* response) const
 {
   RealFft& fft = *transform_.fft;
-  const int n = static_cast<int>(decimated_.size());
+  const std::vector<double>& decimated = record();
+  const int n = static_cast<int>(decimated.size());
   const double fs = 1.0 / (decimation_ * dt_);
   const int bins = kDftSize / 2 + 1;
   std::vector<double> density(bins, 0.0);
@@ -210,7 +206,7 @@ std::vector<double> WienerHeave::welch(int segment, double mean, std::vector<dou
   for (int start = n - segment; start >= 0; start -= std::max(1, segment / 2), ++segments)
   {
     for (int i = 0; i < segment; ++i)
-      fft.in[i] = window[i] * (decimated_[start + i] - mean);
+      fft.in[i] = window[i] * (decimated[start + i] - mean);
     std::fill(fft.in + segment, fft.in + kDftSize, 0.0);
     fft.execute();
     for (int k = 0; k < bins; ++k)
@@ -233,12 +229,13 @@ std::vector<double> WienerHeave::burg(int order, double mean) const
 {
   // Forward and backward prediction errors; each stage's reflection coefficient minimises their
   // summed power (Burg), which keeps the model stable (|k| < 1).
-  const int n = static_cast<int>(decimated_.size());
+  const std::vector<double>& decimated = record();
+  const int n = static_cast<int>(decimated.size());
   std::vector<double> forward(n), backward(n), a(1, 1.0), previous;
   double power = 0.0;
   for (int i = 0; i < n; ++i)
   {
-    forward[i] = backward[i] = decimated_[i] - mean;
+    forward[i] = backward[i] = decimated[i] - mean;
     power += forward[i] * forward[i];
   }
   power /= n;
@@ -290,9 +287,9 @@ WienerHeave::Wave WienerHeave::wave(std::vector<double> density, const std::vect
   const int below = std::min(bins, static_cast<int>(std::ceil(min_frequency_ / df)));
   // A short record's autoregressive model cannot tell a line below the band from the band's first
   // kEdgeResolution / T (T the record's length): the band starts that much higher.
-  const double record = static_cast<double>(decimated_.size()) / fs;
+  const double length = static_cast<double>(record().size()) / fs;
   const int first = kind == Estimate::kShortBurg
-                        ? std::min(bins, static_cast<int>(std::ceil((min_frequency_ + kEdgeResolution / record) / df)))
+                        ? std::min(bins, static_cast<int>(std::ceil((min_frequency_ + kEdgeResolution / length) / df)))
                         : below;
   Wave out;
   out.wave.assign(bins, 0.0);
@@ -365,7 +362,8 @@ WienerHeave::Statistics WienerHeave::statistics(const Wave& w) const
 
   // The cross-spectrum E[x a_d*] of displacement and low-passed acceleration; the low-pass's
   // response AA (two moving averages of D samples at dt).
-  std::vector<std::complex<double>> cross(bins);
+  std::vector<std::complex<double>>& cross = out.cross;
+  cross.assign(bins, 0.0);
   for (int k = 1; k < bins; ++k)
   {
     const double f = k * df, omega = 2.0 * M_PI * f;
@@ -394,11 +392,15 @@ void WienerHeave::design(double noise_density_squared)
 {
   if (!transform_.fft)
     transform_.fft = std::make_shared<RealFft>(kDftSize);
-  const int n = static_cast<int>(decimated_.size());
-  double mean = 0.0;
-  for (double value : decimated_)
-    mean += value;
-  mean /= n;
+  const int n = static_cast<int>(record().size());
+  std::array<double, kChannels> means{};
+  for (int c = 0; c < channels_used_; ++c)
+  {
+    for (double value : channels_[c].decimated)
+      means[c] += value;
+    means[c] /= n;
+  }
+  const double mean = means[0];
 
   // Segments of kSegment once the record holds two; before that the whole record as one: on a
   // short record the resolution decides (a swell lies within the main lobe of short segments'
@@ -411,15 +413,15 @@ void WienerHeave::design(double noise_density_squared)
   // kShortOrder times its length: a swell a window cannot resolve yet (a line it resolves, Burg's
   // model of a short record splits and moves).
   Wave sea;
-  const double record = n * decimation_ * dt_;
-  if ((vertical_ || since_manoeuvre_ > record) && n >= 2 * kSegment)
+  const double length = n * decimation_ * dt_;
+  if ((vertical_ || since_manoeuvre_ > length) && n >= 2 * kSegment)
     sea = wave(burg(kMaxOrder, mean), {}, noise_density_squared, Estimate::kBurg);
   else
   {
     std::vector<double> response;
     std::vector<double> density = welch(n < 2 * kSegment ? n : kSegment, mean, &response);
     sea = wave(std::move(density), response, noise_density_squared, Estimate::kWelch);
-    if (vertical_ && sea.peak_frequency * record < kResolvedCycles)
+    if (vertical_ && sea.peak_frequency * length < kResolvedCycles)
       sea = wave(burg(std::min(kMaxOrder, static_cast<int>(kShortOrder * n)), mean), {}, noise_density_squared,
                  Estimate::kShortBurg);
   }
@@ -429,9 +431,9 @@ void WienerHeave::design(double noise_density_squared)
     peak_frequency_ = 0.0;
     // No wave in the spectrum: no heave.
     auto none = std::make_shared<Design>();
-    none->position.assign(1, 0.0);
-    none->velocity.assign(1, 0.0);
-    none->mean = mean;
+    none->position[0].assign(1, 0.0);
+    none->velocity[0].assign(1, 0.0);
+    none->mean = means;
     previous_ = std::move(current_);
     current_ = std::move(none);
     stale_ = false;
@@ -439,26 +441,166 @@ void WienerHeave::design(double noise_density_squared)
     return;
   }
   auto next = std::make_shared<Design>();
-  if (!solveToeplitz(fit.autocorrelation, fit.r_position, &next->position) ||
-      !solveToeplitz(fit.autocorrelation, fit.r_velocity, &next->velocity))
+  if (!solveToeplitz(fit.autocorrelation, fit.r_position, &next->position[0]) ||
+      !solveToeplitz(fit.autocorrelation, fit.r_velocity, &next->velocity[0]))
     return;  // keep the last design, and its peak
   peak_frequency_ = sea.peak_frequency;
   // The expected error E[(x - h a)^2] = var(x) - h r of taps solved from these statistics
   // (R h = r).
   double explained = 0.0, explained_velocity = 0.0;
-  for (std::size_t i = 0; i < next->position.size(); ++i)
+  for (std::size_t i = 0; i < next->position[0].size(); ++i)
   {
-    explained += next->position[i] * fit.r_position[i];
-    explained_velocity += next->velocity[i] * fit.r_velocity[i];
+    explained += next->position[0][i] * fit.r_position[i];
+    explained_velocity += next->velocity[0][i] * fit.r_velocity[i];
   }
   next->error_variance = std::max(0.0, sea.displacement_variance - explained);
   next->wave_variance = sea.displacement_variance;
   next->velocity_error_variance = std::max(0.0, sea.velocity_variance - explained_velocity);
-  next->mean = mean;
+  next->mean = means;
+  // With companions, a record of kCrossSegments Welch segments and no manoeuvre in it, the
+  // design that reads all three inputs where it expects less error.
+  const double segments = std::floor(static_cast<double>(n - kSegment) / (kSegment / 2)) + 1.0;
+  Design joint;
+  if (channels_used_ > 1 && std::min(since_manoeuvre_, since_gap_) >= length && segments >= kCrossSegments &&
+      companionDesign(sea, fit, means, &joint) && joint.error_variance < next->error_variance)
+    *next = std::move(joint);
   previous_ = std::move(current_);
   current_ = std::move(next);
   stale_ = false;
   fade_ = previous_ ? 0.0 : 1.0;
+}
+
+bool WienerHeave::companionDesign(const Wave& sea, const Statistics& own, const std::array<double, kChannels>& mean,
+                                  Design* next) const
+{
+  using Complex = std::complex<double>;
+  RealFft& fft = *transform_.fft;
+  const int n = static_cast<int>(record().size());
+  const double fs = 1.0 / (decimation_ * dt_);
+  const int bins = kDftSize / 2 + 1;
+  const double df = fs / kDftSize;
+  // Welch's spectral matrix of the three inputs, S_ab = E[U_a conj(U_b)] (the segments of welch()).
+  double window_power = 0.0;
+  const std::vector<double> window = hannWindow(kSegment, &window_power);
+  std::array<std::array<std::vector<Complex>, kChannels>, kChannels> welch_matrix;
+  for (int a = 0; a < kChannels; ++a)
+    for (int b = a; b < kChannels; ++b)
+      welch_matrix[a][b].assign(bins, 0.0);
+  std::array<std::vector<Complex>, kChannels> transform;
+  int segments = 0;
+  for (int start = n - kSegment; start >= 0; start -= kSegment / 2, ++segments)
+  {
+    for (int c = 0; c < kChannels; ++c)
+    {
+      for (int i = 0; i < kSegment; ++i)
+        fft.in[i] = window[i] * (channels_[c].decimated[start + i] - mean[c]);
+      std::fill(fft.in + kSegment, fft.in + kDftSize, 0.0);
+      fft.execute();
+      transform[c].resize(bins);
+      for (int k = 0; k < bins; ++k)
+        transform[c][k] = Complex(fft.out[k][0], fft.out[k][1]);
+    }
+    for (int a = 0; a < kChannels; ++a)
+      for (int b = a; b < kChannels; ++b)
+        for (int k = 0; k < bins; ++k)
+          welch_matrix[a][b][k] += transform[a][k] * std::conj(transform[b][k]);
+  }
+  const double normalisation = 1.0 / (segments * window_power * fs);
+  // The matrix designed from: the own estimate on the diagonal (Welch's for the companions), each
+  // cross-spectrum shrunk by how far its coherence stands above chance, 2 / K for K segments, the
+  // own input's scaled to the own estimate (its coherence kept).
+  const double chance = 2.0 / segments;
+  std::array<std::array<std::vector<Complex>, kChannels>, kChannels> matrix;
+  for (int a = 0; a < kChannels; ++a)
+    for (int b = 0; b < kChannels; ++b)
+      matrix[a][b].assign(bins, 0.0);
+  for (int k = 0; k < bins; ++k)
+  {
+    std::array<double, kChannels> auto_density{};
+    for (int c = 0; c < kChannels; ++c)
+      auto_density[c] = welch_matrix[c][c][k].real() * normalisation;
+    const double own_scale = auto_density[0] > 0.0 ? std::sqrt(sea.density[k] / auto_density[0]) : 0.0;
+    matrix[0][0][k] = sea.density[k];
+    for (int c = 1; c < kChannels; ++c)
+      matrix[c][c][k] = auto_density[c];
+    for (int a = 0; a < kChannels; ++a)
+      for (int b = a + 1; b < kChannels; ++b)
+      {
+        const Complex cross = welch_matrix[a][b][k] * normalisation;
+        const double product = auto_density[a] * auto_density[b];
+        const double coherence = product > 0.0 ? std::norm(cross) / product : 0.0;
+        const double weight = std::clamp((coherence - chance) / (1.0 - chance), 0.0, 1.0);
+        matrix[a][b][k] = weight * (a == 0 ? own_scale : 1.0) * cross;
+        matrix[b][a][k] = std::conj(matrix[a][b][k]);
+      }
+  }
+  const int taps =
+      std::min(static_cast<int>(own.autocorrelation.size()), static_cast<int>(std::lround(kCrossSpan * fs)));
+  const auto correlation = [&](auto spectrum) {
+    for (int k = 0; k < bins; ++k)
+    {
+      const Complex value = spectrum(k);
+      fft.out[k][0] = value.real();
+      fft.out[k][1] = value.imag();
+    }
+    fft.inverse();
+    return std::vector<double>(fft.in, fft.in + taps);
+  };
+  // The normal equations sum_j E[u(n - i) u(n - j)^T] h_j = E[x(n) u(n - i)]: block (i, j) is
+  // R(j - i), R(lag)(a, b) = E[u_a(n) u_b(n - lag)], so block r[lag] = R(lag)^T; the right-hand
+  // sides E[x(n) u_c(n - lag)], the
+  // displacement's cross-spectrum with companion c -S_0c / (omega^2 AA) where the own axis
+  // holds a wave (that of the own input from its statistics).
+  std::vector<Eigen::Matrix3d> blocks(taps);
+  for (int a = 0; a < kChannels; ++a)
+    for (int b = 0; b < kChannels; ++b)
+    {
+      const std::vector<double> r =
+          a == 0 && b == 0 ? own.autocorrelation : correlation([&](int k) { return matrix[a][b][k] * df; });
+      for (int lag = 0; lag < taps; ++lag)
+        blocks[lag](b, a) = r[lag];
+    }
+  Eigen::MatrixXd rhs(3 * taps, 2);
+  for (int c = 0; c < kChannels; ++c)
+  {
+    const auto displacement_cross = [&](int k) {
+      if (c == 0)
+        return own.cross[k];
+      if (k == 0 || !(sea.wave[k] > 0.0))
+        return Complex(0.0);
+      const double omega = 2.0 * M_PI * k * df;
+      const Complex aa = sea.gain[k] * std::polar(1.0, -omega * (decimation_ - 1) * dt_);
+      return -matrix[0][c][k] / (omega * omega * aa);
+    };
+    const std::vector<double> position = correlation([&](int k) { return displacement_cross(k) * df; });
+    const std::vector<double> velocity =
+        correlation([&](int k) { return Complex(0.0, 2.0 * M_PI * k * df) * displacement_cross(k) * df; });
+    for (int lag = 0; lag < taps; ++lag)
+    {
+      rhs(3 * lag + c, 0) = position[lag];
+      rhs(3 * lag + c, 1) = velocity[lag];
+    }
+  }
+  Eigen::MatrixXd solution;
+  if (!solveBlockToeplitz(blocks, rhs, &solution))
+    return false;
+  // The expected errors, var(x) - h r as for one input.
+  const Eigen::Vector2d explained = (solution.cwiseProduct(rhs)).colwise().sum();
+  next->error_variance = std::max(0.0, sea.displacement_variance - explained[0]);
+  next->velocity_error_variance = std::max(0.0, sea.velocity_variance - explained[1]);
+  next->wave_variance = sea.displacement_variance;
+  next->mean = mean;
+  for (int c = 0; c < kChannels; ++c)
+  {
+    next->position[c].resize(taps);
+    next->velocity[c].resize(taps);
+    for (int lag = 0; lag < taps; ++lag)
+    {
+      next->position[c][lag] = solution(3 * lag + c, 0);
+      next->velocity[c][lag] = solution(3 * lag + c, 1);
+    }
+  }
+  return true;
 }
 
 }  // namespace periodic_bias_compensation

@@ -450,4 +450,91 @@ TEST(WienerHeave, AbsurdPeriodsAreIgnored)
   }
 }
 
+namespace
+{
+/// One horizontal axis of a long-crested sea read with and without companions: its wave moves
+/// `sway` times the heave's displacement, a quarter period ahead; the axis's accelerometer has
+/// `noise` times the heave's white noise and a bias random walk. Companion 0: the vertical
+/// axis (the same sea, or `unrelated` a sea of its own); companion 1 white noise alone. Errors
+/// from `settle` s on, relative to the sway's RMS; `with` and `without` companions.
+struct CompanionErrors
+{
+  double with = 0.0, without = 0.0;
+  bool reads = false;  ///< the last design read the companions
+};
+CompanionErrors runWithCompanions(double duration, double settle, bool unrelated, unsigned seed, bool finite = true)
+{
+  const double rate = 20.0, dt = 1.0 / rate, density = 0.004, sigma = density * std::sqrt(rate / 2.0);
+  const double sway = 0.5, noise = 10.0;
+  const Sea sea = Sea(1.0 / 8.0, 2.0, seed) + Sea::swell(1.0 / 14.0, 1.0, seed + 1, 0.05);
+  const Sea other = Sea(1.0 / 6.0, 2.0, seed + 2);
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  WienerHeave alone(0.03, false), joint(0.03, false, true);
+  double walk = 0.0, e_with = 0.0, e_without = 0.0, s = 0.0;
+  for (long i = 0; i < static_cast<long>(duration * rate); ++i)
+  {
+    const double t = i * dt;
+    // A quarter period ahead: the displacement of a component sin(w t + p) becomes cos(w t + p),
+    // its acceleration -w^2 cos: the velocity's shape over w.
+    double x = 0.0, v = 0.0, a = 0.0, ox = 0.0, ov = 0.0, oa = 0.0;
+    sea.at(t, &x, &v, &a);
+    double y = 0.0, ay = 0.0;
+    for (size_t k = 0; k < sea.frequency.size(); ++k)
+    {
+      const double w = 2.0 * M_PI * sea.frequency[k], angle = w * t + sea.phase[k];
+      y += sway * sea.amplitude[k] * std::cos(angle);
+      ay -= sway * sea.amplitude[k] * w * w * std::cos(angle);
+    }
+    if (unrelated)
+      other.at(t, &ox, &ov, &oa);
+    walk += 2e-4 * std::sqrt(dt) * normal(rng);
+    const double measured = ay + 0.02 + walk + noise * sigma * normal(rng);
+    WienerHeave::Companions companions{ (unrelated ? oa : a) + sigma * normal(rng), sigma * normal(rng) };
+    if (!finite && i % 2000 == 0)
+      companions[1] = NAN;
+    const WienerHeaveOutput without = alone.update(measured, dt, noise * noise * density * density);
+    const WienerHeaveOutput with = joint.update(measured, dt, noise * noise * density * density, companions);
+    if (t < settle)
+      continue;
+    EXPECT_TRUE(with.valid && std::isfinite(with.position) && std::isfinite(with.velocity));
+    e_with += std::pow(with.position - y, 2);
+    e_without += std::pow(without.position - y, 2);
+    s += y * y;
+  }
+  return { std::sqrt(e_with / s), std::sqrt(e_without / s), joint.readsCompanions() };
+}
+}  // namespace
+
+// A sway ten times noisier than the heave of the same long-crested sea: the vertical axis says
+// what the sway's noise and bias walk hide. Once the record holds kCrossSegments segments the
+// design reads it: error less than half what the axis alone gives.
+TEST(WienerHeave, CompanionsOfTheSameSea)
+{
+  const double settle = 4.0 * WienerHeave::kSegment * WienerHeave::kDesignPeriod;
+  const CompanionErrors e = runWithCompanions(1800.0, settle, false, 21);
+  std::printf("[companions] sway error %.1f %% with the vertical axis read, %.1f %% without\n", 100.0 * e.with,
+              100.0 * e.without);
+  EXPECT_TRUE(e.reads);
+  EXPECT_LT(e.with, 0.5 * e.without);
+}
+
+// Companions that hold another sea (and noise): nothing to gain, nothing lost.
+TEST(WienerHeave, UnrelatedCompanionsCostNothing)
+{
+  const CompanionErrors e = runWithCompanions(1800.0, 200.0, true, 22);
+  std::printf("[companions] sway error %.1f %% with an unrelated sea's axis read, %.1f %% without\n", 100.0 * e.with,
+              100.0 * e.without);
+  EXPECT_LT(e.with, 1.03 * e.without);
+}
+
+// A companion that is not finite is a gap in its record: no design reads the companions while
+// their window holds it, and the output is the axis's own.
+TEST(WienerHeave, CompanionGapsAreManoeuvres)
+{
+  const CompanionErrors e = runWithCompanions(1800.0, 200.0, false, 21, false);
+  EXPECT_FALSE(e.reads);
+  EXPECT_EQ(e.with, e.without);
+}
+
 }  // namespace periodic_bias_compensation

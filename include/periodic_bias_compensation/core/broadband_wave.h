@@ -57,8 +57,11 @@ namespace periodic_bias_compensation
 /// One sample of one axis, as the owner has it.
 struct BroadbandWaveInput
 {
-  double raw = 0.0;                ///< level acceleration, gravity removed [m/s^2]
-  double offset_free = 0.0;        ///< raw less the calibrated constant offset (fixed once calibrated)
+  double raw = 0.0;          ///< level acceleration, gravity removed [m/s^2]
+  double offset_free = 0.0;  ///< raw less the calibrated constant offset (fixed once calibrated)
+  /// The other two axes' offset_free, in the order x, y, z without this one (read by the spectral
+  /// estimate of a BroadbandWave made with companions).
+  WienerHeave::Companions companions{};
   double residual = 0.0;           ///< what the harmonic model leaves of the acceleration [m/s^2]
   double harmonic_position = 0.0;  ///< the harmonic model's wave displacement [m]
   bool locked = false;             ///< the harmonic model has a lock
@@ -109,8 +112,10 @@ public:
   /// (a sea, not the noise and bias wander it passes at rest) [-].
   static constexpr double kSeaOverError = 2.0;
 
-  /// vertical: the fixed filter stands in until the spectral estimate is designed.
-  explicit BroadbandWave(bool vertical = true, double corner_frequency = 0.015, double min_frequency = 0.05);
+  /// vertical: the fixed filter stands in until the spectral estimate is designed. companions:
+  /// the spectral estimate reads the other axes' accelerations too (WienerHeave).
+  explicit BroadbandWave(bool vertical = true, double corner_frequency = 0.015, double min_frequency = 0.05,
+                         bool companions = false);
 
   /// Forgets everything (filters, variances, share).
   void reset();
@@ -143,6 +148,7 @@ private:
   };
   bool vertical_;
   double min_frequency_;
+  bool companions_;
   HeaveFilter fixed_;
   WienerHeave spectral_;
   /// The ways the harmonic model's residual is measured above the band edge.

@@ -30,6 +30,16 @@
 //  4. applies the FIR at every sample to the low-passed values D samples apart ending at that
 //     sample, so the output has the input's rate; a new design fades in over kDesignFade.
 //
+// With companions (the other two level axes' accelerations, given at every sample), once the
+// record holds kCrossSegments Welch segments and no manoeuvre, a second design reads all three
+// inputs: a sea moves every axis with the same waves, and the other axes' accelerations say what
+// this axis's noise and bias wander hide (on a long-crested sea surge and heave are one wave seen
+// twice). Its spectral matrix is the own estimate above on the diagonal and Welch's
+// cross-spectra beside it, each shrunk by how far its coherence stands above what K segments of
+// unrelated inputs show (weight (C - 2 / K) / (1 - 2 / K), none below), the other inputs' FIRs
+// kCrossSpan long; the block-Toeplitz normal equations are solved by a multichannel Levinson
+// recursion, and the design is taken when its expected error is below the own design's.
+//
 // Below min_frequency and under the noise floor the filter passes nothing, so bias wander and
 // white noise are weighted by what the spectrum holds, not by a fixed corner. Until the first
 // design (kFirstDesign of data, kRestartDesign after restartRecord()) it has no output: the owner
@@ -38,6 +48,8 @@
 // Threading: not thread-safe; the owner serialises calls.
 #pragma once
 
+#include <array>
+#include <complex>
 #include <limits>
 #include <memory>
 #include <vector>
@@ -89,12 +101,19 @@ public:
   static constexpr double kShortOrder = 0.5;
   /// Width above min_frequency that a short record cannot tell from below it, over its length [-].
   static constexpr double kEdgeResolution = 0.5;
+  /// Welch segments the record holds before the other axes are read: coherence from fewer is
+  /// mostly chance [-].
+  static constexpr int kCrossSegments = 6;
+  /// Span of the other inputs' FIRs, and of the own input's in a design that reads them [s].
+  static constexpr double kCrossSpan = 60.0;
+  /// The other two level axes' accelerations, as update() takes them.
+  using Companions = std::array<double, 2>;
 
   /// min_frequency [Hz]: the lowest wave frequency; below it nothing is heave. `vertical`: the
   /// record holds no manoeuvre, and Burg's estimate serves its long records and the short ones a
   /// window cannot resolve; a horizontal axis's long records take it while they hold no manoeuvre
-  /// (noteManoeuvre()).
-  explicit WienerHeave(double min_frequency = 0.04, bool vertical = false);
+  /// (noteManoeuvre()). `companions`: update() is given the other two axes' accelerations too.
+  explicit WienerHeave(double min_frequency = 0.04, bool vertical = false, bool companions = false);
 
   /// Forgets everything; the next sample starts a new record.
   void reset();
@@ -102,10 +121,10 @@ public:
   /// spectrum is measured anew from the next sample. The last design stays applied but is marked
   /// stale (`valid` false) until the first design from the new record, kRestartDesign of it.
   void restartRecord();
-  /// A horizontal axis's record holds a manoeuvre from now on (a turn, or the axis blocked):
-  /// designs whose window reaches back to it take Welch's estimate, which says what the band owes
-  /// the manoeuvre's lines below it (an autoregressive model's peaks fall off too slowly beside
-  /// them).
+  /// The record holds a manoeuvre from now on (a turn, or the horizontal axes blocked): designs
+  /// whose window reaches back to it read no companion, and on a horizontal axis take Welch's
+  /// estimate, which says what the band owes the manoeuvre's lines below it (an autoregressive
+  /// model's peaks fall off too slowly beside them).
   void noteManoeuvre()
   {
     since_manoeuvre_ = 0.0;
@@ -119,6 +138,10 @@ public:
   /// period the record began with starts it over) and the white-noise density of the
   /// acceleration squared, one-sided [(m/s^2)^2/Hz], used at the next design.
   WienerHeaveOutput update(double a, double period, double noise_density_squared);
+  /// The same with the other two axes' level accelerations [m/s^2] (a WienerHeave made with
+  /// companions; a sample without them, or with one not finite, is a gap in their records: no
+  /// design reads them while its window holds one).
+  WienerHeaveOutput update(double a, double period, double noise_density_squared, const Companions& companions);
 
   /// A design has been made since the last reset() (it may be stale after restartRecord()).
   bool designed() const
@@ -139,15 +162,36 @@ public:
   /// design yet).
   double span() const
   {
-    return current_ ? static_cast<double>(current_->position.size()) * decimation_ * dt_ : 0.0;
+    return current_ ? static_cast<double>(current_->position[0].size()) * decimation_ * dt_ : 0.0;
+  }
+  /// The current design reads the companions.
+  bool readsCompanions() const
+  {
+    return current_ != nullptr && !current_->position[1].empty();
   }
 
 private:
+  /// The own input ([0]) and the companions.
+  static constexpr int kChannels = 3;
+  /// One input's low-pass and records.
+  struct Channel
+  {
+    // Two moving averages of decimation_ samples.
+    std::vector<double> first, second;
+    double first_sum = 0.0, second_sum = 0.0;
+    // Low-passed values at the full rate in decimation_ rings of ring_length_ (one per sample
+    // phase modulo D, so that the FIR reads consecutive values); the newest at newest_.
+    std::vector<double> history;
+    // Design-rate values, oldest first, at most kDesignWindow.
+    std::vector<double> decimated;
+  };
   struct Design
   {
-    std::vector<double> position;  ///< FIR taps, newest first
-    std::vector<double> velocity;
-    double mean = 0.0;  ///< the design window's mean acceleration, taken off first
+    /// FIR taps per input, newest first (a companion's empty: not read).
+    std::array<std::vector<double>, kChannels> position;
+    std::array<std::vector<double>, kChannels> velocity;
+    /// The design window's mean input, taken off first.
+    std::array<double, kChannels> mean{};
     double error_variance = 0.0;
     double velocity_error_variance = 0.0;
     double wave_variance = 0.0;
@@ -177,7 +221,14 @@ private:
     std::vector<double> autocorrelation;  ///< of the low-passed acceleration
     std::vector<double> r_position;       ///< of displacement with it
     std::vector<double> r_velocity;       ///< of velocity with it
+    /// Displacement's cross-spectrum with the low-passed acceleration per bin, E[X conj(U)].
+    std::vector<std::complex<double>> cross;
   };
+  /// The own input's design-rate values.
+  const std::vector<double>& record() const
+  {
+    return channels_[0].decimated;
+  }
   /// Two-sided density of the design-rate values less `mean` [(m/s^2)^2/Hz] at kDftSize / 2 + 1
   /// frequencies: Welch's with Hann segments of `segment` values, half overlap, and in
   /// *response the window's power response relative to its peak at the same frequencies.
@@ -191,28 +242,29 @@ private:
   Wave wave(std::vector<double> density, const std::vector<double>& response, double noise_density_squared,
             Estimate kind) const;
   Statistics statistics(const Wave& wave) const;
+  /// The design that reads the companions too, from the own wave `sea` and its statistics `own`,
+  /// into *next (its taps and expected errors); false when the equations are not well posed.
+  bool companionDesign(const Wave& sea, const Statistics& own, const std::array<double, kChannels>& mean,
+                       Design* next) const;
   void design(double noise_density_squared);
+  WienerHeaveOutput step(double a, double period, double noise_density_squared, const Companions* companions);
   void apply(const Design& d, double* x, double* v) const;
 
   double min_frequency_;
   bool vertical_;
+  int channels_used_;      ///< 1, or kChannels with companions
   double dt_ = 0.0;        ///< the sample period, the owner's latest [s]
   double sized_dt_ = 0.0;  ///< the period the record began with, which sized the buffers [s]
   int decimation_ = 0;
-  // Two moving averages of decimation_ samples.
-  std::vector<double> first_, second_;
-  double first_sum_ = 0.0, second_sum_ = 0.0;
   long samples_ = 0;
-  // Low-passed values at the full rate in decimation_ rings of ring_length_ (one per sample
-  // phase modulo D, so that the FIR reads consecutive values); the newest at history_[newest_].
-  std::vector<double> history_;
+  std::array<Channel, kChannels> channels_;
   int ring_length_ = 0;
-  int newest_ = 0;
-  // Design-rate values, oldest first, at most kDesignWindow.
-  std::vector<double> decimated_;
+  int newest_ = 0;  ///< the newest value's place in every channel's history
   double since_design_ = 0.0;
   /// Data since noteManoeuvre() [s] (infinite: none since reset()).
   double since_manoeuvre_ = std::numeric_limits<double>::infinity();
+  /// Data since a sample without (finite) companions [s].
+  double since_gap_ = std::numeric_limits<double>::infinity();
   bool stale_ = false;  ///< the design is from a record restartRecord() ended
   // Designs are never changed once made: copies of this object share them.
   std::shared_ptr<const Design> current_, previous_;
