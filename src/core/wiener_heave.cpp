@@ -88,7 +88,13 @@ WienerHeaveOutput WienerHeave::step(double a, double period, double noise_densit
     if (companions && std::isfinite((*companions)[0]) && std::isfinite((*companions)[1]))
       std::copy(companions->begin(), companions->end(), input.begin() + 1);
     else
+    {
+      // A gap: the companions' records hold zeros from here, which a design reading them would
+      // take for the sea; the next sample designs anew (from the own input alone).
       since_gap_ = 0.0;
+      if (readsCompanions())
+        since_design_ = std::numeric_limits<double>::infinity();
+    }
   }
   // Two moving averages (running sums over circular buffers of decimation_ values).
   const int slot = static_cast<int>(samples_ % decimation_);

@@ -462,7 +462,8 @@ struct CompanionErrors
   double with = 0.0, without = 0.0;
   bool reads = false;  ///< the last design read the companions
 };
-CompanionErrors runWithCompanions(double duration, double settle, bool unrelated, unsigned seed, bool finite = true)
+CompanionErrors runWithCompanions(double duration, double settle, bool unrelated, unsigned seed, bool finite = true,
+                                  double gap_at = -1.0)
 {
   const double rate = 20.0, dt = 1.0 / rate, density = 0.004, sigma = density * std::sqrt(rate / 2.0);
   const double sway = 0.5, noise = 10.0;
@@ -491,7 +492,7 @@ CompanionErrors runWithCompanions(double duration, double settle, bool unrelated
     walk += 2e-4 * std::sqrt(dt) * normal(rng);
     const double measured = ay + 0.02 + walk + noise * sigma * normal(rng);
     WienerHeave::Companions companions{ (unrelated ? oa : a) + sigma * normal(rng), sigma * normal(rng) };
-    if (!finite && i % 2000 == 0)
+    if ((!finite && i % 2000 == 0) || (gap_at >= 0.0 && i == static_cast<long>(gap_at * rate)))
       companions[1] = NAN;
     const WienerHeaveOutput without = alone.update(measured, dt, noise * noise * density * density);
     const WienerHeaveOutput with = joint.update(measured, dt, noise * noise * density * density, companions);
@@ -529,12 +530,17 @@ TEST(WienerHeave, UnrelatedCompanionsCostNothing)
 }
 
 // A companion that is not finite is a gap in its record: no design reads the companions while
-// their window holds it, and the output is the axis's own.
+// their window holds it, and the output is the axis's own; a gap ends a design that reads them.
 TEST(WienerHeave, CompanionGapsAreManoeuvres)
 {
   const CompanionErrors e = runWithCompanions(1800.0, 200.0, false, 21, false);
   EXPECT_FALSE(e.reads);
   EXPECT_EQ(e.with, e.without);
+  // One gap after the design reads them: the next sample designs from the own input.
+  const CompanionErrors gap = runWithCompanions(1200.0 + 1.0 / 20.0, 1200.0, false, 21, true, 1200.0);
+  EXPECT_FALSE(gap.reads);
+  const CompanionErrors none = runWithCompanions(1200.0 + 1.0 / 20.0, 1200.0, false, 21, true);
+  EXPECT_TRUE(none.reads);
 }
 
 }  // namespace periodic_bias_compensation

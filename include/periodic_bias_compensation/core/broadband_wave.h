@@ -3,9 +3,9 @@
 //
 // The harmonic model of the default mode describes one dominant period; a broad sea leaves much
 // of the wave out. BroadbandWave estimates the whole wave band instead, from the acceleration less
-// the calibrated offset: the spectral (Wiener) estimate once it is designed (WienerHeave), before
-// that, on the vertical axis only, the fixed double integrator (HeaveFilter). The two estimates
-// are blended by inverse variance:
+// the calibrated offset: the spectral (Wiener) estimate once it is designed (WienerHeave, which
+// with companions reads the other two level axes too), before that, on the vertical axis only,
+// the fixed double integrator (HeaveFilter). The two estimates are blended by inverse variance:
 //  - what the harmonic model misses is measured where bias wander is not: its residual
 //    acceleration above min_frequency (two first-order high-passes, only against a locked
 //    model; on the vertical axis four until the first spectral design, while the fixed filter
