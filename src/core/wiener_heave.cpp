@@ -350,12 +350,30 @@ WienerHeave::Wave WienerHeave::wave(std::vector<double> density, const std::vect
   return out;
 }
 
+std::complex<double> WienerHeave::lowPass(double gain, double omega) const
+{
+  return gain * std::polar(1.0, -omega * (decimation_ - 1) * dt_);
+}
+
+template <typename Spectrum>
+std::vector<double> WienerHeave::correlation(const Spectrum& spectrum, int taps) const
+{
+  RealFft& fft = *transform_.fft;
+  for (int k = 0; k < kDftSize / 2 + 1; ++k)
+  {
+    const std::complex<double> value = spectrum(k);
+    fft.out[k][0] = value.real();
+    fft.out[k][1] = value.imag();
+  }
+  fft.inverse();
+  return std::vector<double>(fft.in, fft.in + taps);
+}
+
 WienerHeave::Statistics WienerHeave::statistics(const Wave& w) const
 {
   Statistics out;
   if (!(w.peak_frequency > 0.0))
     return out;  // no wave in the spectrum
-  RealFft& fft = *transform_.fft;
   const double fs = 1.0 / (decimation_ * dt_);
   const int bins = kDftSize / 2 + 1;
   const double df = fs / kDftSize;
@@ -373,24 +391,14 @@ WienerHeave::Statistics WienerHeave::statistics(const Wave& w) const
   for (int k = 1; k < bins; ++k)
   {
     const double f = k * df, omega = 2.0 * M_PI * f;
-    const std::complex<double> aa = w.gain[k] * std::polar(1.0, -omega * (decimation_ - 1) * dt_);
-    cross[k] = -std::conj(aa) * w.wave[k] / (omega * omega);
+    cross[k] = -std::conj(lowPass(w.gain[k], omega)) * w.wave[k] / (omega * omega);
   }
-  // Correlations at lags 0..taps-1: the inverse transforms of the (Hermitian) spectra, the
-  // velocity's cross-spectrum j omega times the displacement's.
-  const auto correlation = [&](auto spectrum) {
-    for (int k = 0; k < bins; ++k)
-    {
-      const std::complex<double> value = spectrum(k);
-      fft.out[k][0] = value.real();
-      fft.out[k][1] = value.imag();
-    }
-    fft.inverse();
-    return std::vector<double>(fft.in, fft.in + taps);
-  };
-  out.autocorrelation = correlation([&](int k) { return std::complex<double>(w.density[k] * df); });
-  out.r_position = correlation([&](int k) { return cross[k] * df; });
-  out.r_velocity = correlation([&](int k) { return std::complex<double>(0.0, 2.0 * M_PI * k * df) * cross[k] * df; });
+  // Correlations at lags 0..taps-1, the velocity's cross-spectrum j omega times the
+  // displacement's.
+  out.autocorrelation = correlation([&](int k) { return std::complex<double>(w.density[k] * df); }, taps);
+  out.r_position = correlation([&](int k) { return cross[k] * df; }, taps);
+  out.r_velocity =
+      correlation([&](int k) { return std::complex<double>(0.0, 2.0 * M_PI * k * df) * cross[k] * df; }, taps);
   return out;
 }
 
@@ -542,27 +550,17 @@ bool WienerHeave::companionDesign(const Wave& sea, const Statistics& own, const 
   }
   const int taps =
       std::min(static_cast<int>(own.autocorrelation.size()), static_cast<int>(std::lround(kCrossSpan * fs)));
-  const auto correlation = [&](auto spectrum) {
-    for (int k = 0; k < bins; ++k)
-    {
-      const Complex value = spectrum(k);
-      fft.out[k][0] = value.real();
-      fft.out[k][1] = value.imag();
-    }
-    fft.inverse();
-    return std::vector<double>(fft.in, fft.in + taps);
-  };
   // The normal equations sum_j E[u(n - i) u(n - j)^T] h_j = E[x(n) u(n - i)]: block (i, j) is
   // R(j - i), R(lag)(a, b) = E[u_a(n) u_b(n - lag)], so block r[lag] = R(lag)^T; the right-hand
-  // sides E[x(n) u_c(n - lag)], the
-  // displacement's cross-spectrum with companion c -S_0c / (omega^2 AA) where the own axis
-  // holds a wave (that of the own input from its statistics).
+  // sides E[x(n) u_c(n - lag)], the displacement's cross-spectrum with companion c
+  // -S_0c / (omega^2 AA) where the own axis holds a wave (that of the own input from its
+  // statistics).
   std::vector<Eigen::Matrix3d> blocks(taps);
   for (int a = 0; a < kChannels; ++a)
     for (int b = 0; b < kChannels; ++b)
     {
       const std::vector<double> r =
-          a == 0 && b == 0 ? own.autocorrelation : correlation([&](int k) { return matrix[a][b][k] * df; });
+          a == 0 && b == 0 ? own.autocorrelation : correlation([&](int k) { return matrix[a][b][k] * df; }, taps);
       for (int lag = 0; lag < taps; ++lag)
         blocks[lag](b, a) = r[lag];
     }
@@ -575,12 +573,11 @@ bool WienerHeave::companionDesign(const Wave& sea, const Statistics& own, const 
       if (k == 0 || !(sea.wave[k] > 0.0))
         return Complex(0.0);
       const double omega = 2.0 * M_PI * k * df;
-      const Complex aa = sea.gain[k] * std::polar(1.0, -omega * (decimation_ - 1) * dt_);
-      return -matrix[0][c][k] / (omega * omega * aa);
+      return -matrix[0][c][k] / (omega * omega * lowPass(sea.gain[k], omega));
     };
-    const std::vector<double> position = correlation([&](int k) { return displacement_cross(k) * df; });
+    const std::vector<double> position = correlation([&](int k) { return displacement_cross(k) * df; }, taps);
     const std::vector<double> velocity =
-        correlation([&](int k) { return Complex(0.0, 2.0 * M_PI * k * df) * displacement_cross(k) * df; });
+        correlation([&](int k) { return Complex(0.0, 2.0 * M_PI * k * df) * displacement_cross(k) * df; }, taps);
     for (int lag = 0; lag < taps; ++lag)
     {
       rhs(3 * lag + c, 0) = position[lag];

@@ -241,6 +241,12 @@ private:
   /// `kind` takes off besides.
   Wave wave(std::vector<double> density, const std::vector<double>& response, double noise_density_squared,
             Estimate kind) const;
+  /// The two moving averages' response at omega [rad/s] from its power response `gain`: AA.
+  std::complex<double> lowPass(double gain, double omega) const;
+  /// The correlations at lags 0..taps-1 of a two-sided (Hermitian) spectrum given per bin times
+  /// the bin width, spectrum(k) for k = 0..kDftSize / 2: its inverse transform.
+  template <typename Spectrum>
+  std::vector<double> correlation(const Spectrum& spectrum, int taps) const;
   Statistics statistics(const Wave& wave) const;
   /// The design that reads the companions too, from the own wave `sea` and its statistics `own`,
   /// into *next (its taps and expected errors); false when the equations are not well posed.
