@@ -36,6 +36,7 @@ void BroadbandWave::reset()
   residual_samples_ = 0.0;
   samples_ = 0.0;
   weight_ = 0.0;
+  returning_ = false;
   spectral_share_ = 0.0;
   low_ = {};
   low_variance_ = 0.0;
@@ -60,9 +61,9 @@ BroadbandWaveOutput BroadbandWave::update(const BroadbandWaveInput& in)
   const double density = noiseDensitySquared(in.rate);
   if (in.turning && vertical_)
     spectral_.restartRecord();
-  // A turn, or horizontal axes that may not be read: a manoeuvre in the horizontal records (the
-  // vertical one begins anew at a turn, its companions with it).
-  if (!vertical_ && (in.turning || !in.allowed))
+  // A turn, or horizontal axes that may not be read for a manoeuvre: one in the horizontal records
+  // (the vertical one begins anew at a turn, its companions with it).
+  if (!vertical_ && (in.turning || (!in.allowed && in.manoeuvre)))
     spectral_.noteManoeuvre();
   const double period = in.rate_settled && in.rate > 0.0 ? 1.0 / in.rate : 0.0;
   const WienerHeaveOutput spectral = companions_ ? spectral_.update(in.offset_free, period, density, in.companions)
@@ -212,8 +213,13 @@ BroadbandWaveOutput BroadbandWave::update(const BroadbandWaveInput& in)
     target = 0.0;
   if (target < kMinWeight)
     target = 0.0;
+  // A hold moves the share out and back in quickly; the target's own moves are smoothed.
+  if (blocked)
+    returning_ = true;
   if (dt > 0.0)
-    weight_ += (1.0 - std::exp(-dt / (blocked ? kBlockedFade : kWeightTime))) * (target - weight_);
+    weight_ += (1.0 - std::exp(-dt / (returning_ ? kBlockedFade : kWeightTime))) * (target - weight_);
+  if (!blocked && std::abs(target - weight_) < kReturned)
+    returning_ = false;
   out.weight = weight_;
   return out;
 }

@@ -763,6 +763,7 @@ private:
     in.locked = axis.locked;
     in.frequency = axis.frequency;
     in.allowed = turns_.horizontalShareAllowed();
+    in.manoeuvre = turns_.recordManoeuvre();
     in.turning = turns_.turned();
     in.dt = dt;
     in.rate = rate_;

@@ -26,6 +26,7 @@ void TurnDetector::update(double heading, double yaw_rate, double dt, bool attit
 {
   followHeading(heading, dt);
   followYawRate(yaw_rate, dt);
+  attitude_measured_ = attitude_measured;
   if (!attitude_measured)
     since_turn_ = 0.0;
 }

@@ -169,6 +169,20 @@ TEST(BroadbandWave, HorizontalOnlySpectralAndBlockable)
   EXPECT_LT(largest, 0.05);
 }
 
+// A hold that ends (the sea's yaw, a turn's hold run out): the share returns as fast as it left,
+// within a second and a half, not at the pace that smooths its target (kWeightTime, 2 s).
+TEST(BroadbandWave, HeldShareReturnsAsFastAsItLeft)
+{
+  const BroadSea sea(0.5, 3);
+  BroadbandWave wave(false);
+  std::mt19937_64 rng(3);
+  double t = 0.0;
+  const double before = feed(&wave, &sea, WienerHeave::kFirstDesign + 300.0, true, &t, &rng).weight;
+  ASSERT_GT(before, 0.8);
+  EXPECT_LT(feed(&wave, &sea, 2.0, false, &t, &rng).weight, 0.05);
+  EXPECT_GT(feed(&wave, &sea, 1.5, true, &t, &rng).weight, before - 0.1) << "1.5 s after the hold";
+}
+
 // A turn changes every encounter frequency: the vertical axis crosses over to the fixed filter
 // without a step while the spectrum is measured anew, and back once the new record gives a design.
 TEST(BroadbandWave, TurnHandsTheVerticalToTheFixedFilterAndBack)

@@ -149,4 +149,35 @@ TEST(TurnDetector, SinceYawCountsFromTheLastYaw)
   }
 }
 
+// The start and the sea's yaw hold the share off but are no manoeuvre of the records; a turn
+// until kAfterTurn after it, and a missing attitude, are.
+TEST(TurnDetector, RecordManoeuvresAreTurnsAndMissingAttitudes)
+{
+  TurnDetector steady;
+  feed(&steady, 0.5 * TurnDetector::kAfterStart, [](double) { return 0.3; });
+  EXPECT_FALSE(steady.horizontalShareAllowed());
+  EXPECT_FALSE(steady.recordManoeuvre());
+
+  TurnDetector yawing;
+  feed(&yawing, 0.5 * TurnDetector::kAfterStart, [](double t) { return 0.1 * std::sin(0.8 * t); });
+  EXPECT_FALSE(yawing.horizontalShareAllowed());
+  EXPECT_FALSE(yawing.recordManoeuvre());
+
+  TurnDetector blind;
+  feed(
+      &blind, 0.5 * TurnDetector::kAfterStart, [](double) { return 0.3; }, false);
+  EXPECT_TRUE(blind.recordManoeuvre());
+
+  TurnDetector turning;
+  const auto heading = [](double t) { return t < 300.0 ? 0.0 : 0.03 * std::min(t - 300.0, 50.0); };
+  feed(&turning, 300.0, heading);
+  ASSERT_FALSE(turning.recordManoeuvre());
+  feed(&turning, 60.0, heading, true, 300.0);
+  EXPECT_TRUE(turning.recordManoeuvre());
+  feed(&turning, 0.9 * TurnDetector::kAfterTurn, heading, true, 360.0);
+  EXPECT_TRUE(turning.recordManoeuvre());
+  feed(&turning, 0.2 * TurnDetector::kAfterTurn, heading, true, 360.0 + 0.9 * TurnDetector::kAfterTurn);
+  EXPECT_FALSE(turning.recordManoeuvre());
+}
+
 }  // namespace periodic_bias_compensation

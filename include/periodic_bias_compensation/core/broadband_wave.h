@@ -39,7 +39,7 @@
 // While the ship turns, the spectrum is measured anew (WienerHeave::restartRecord); the vertical
 // axis crosses over to the fixed filter with WienerHeave::kDesignFade and back once the new record
 // gives a design. A horizontal axis takes the spectral estimate only, and none while the owner says it may not
-// (a ship turning, no attitude): its share then fades out with kBlockedFade.
+// (a ship turning, no attitude): its share then fades out with kBlockedFade, and returns as fast.
 //
 // Threading: not thread-safe; the owner serialises calls.
 #pragma once
@@ -67,9 +67,12 @@ struct BroadbandWaveInput
   bool locked = false;             ///< the harmonic model has a lock
   double frequency = 0.0;          ///< the lock's frequency [Hz] (with a lock)
   bool allowed = true;             ///< a horizontal axis may take a broadband share now
-  bool turning = false;            ///< the heading has moved: the sea as met changed, its spectrum is measured anew
-  double dt = 0.0;                 ///< [s] since the previous sample (0: the first)
-  double rate = 0.0;               ///< sample rate [Hz] (0: not known yet)
+  /// The horizontal record takes a manoeuvre now (by default whenever the share is not allowed;
+  /// the start and the sea's yaw hold the share off but are none).
+  bool manoeuvre = true;
+  bool turning = false;  ///< the heading has moved: the sea as met changed, its spectrum is measured anew
+  double dt = 0.0;       ///< [s] since the previous sample (0: the first)
+  double rate = 0.0;     ///< sample rate [Hz] (0: not known yet)
   /// The rate rests on enough of the stream to size the spectral estimate's buffers by (the
   /// owner's time base has settled); until then the spectral estimate takes no sample.
   bool rate_settled = true;
@@ -100,8 +103,11 @@ public:
   static constexpr double kMissSignificance = 2.0;
   /// Time constant with which the share follows its target [s]: never a step.
   static constexpr double kWeightTime = 2.0;
-  /// Time constant with which a horizontal share fades out when it is no longer allowed [s].
+  /// Time constant with which a horizontal share fades out when it is no longer allowed, and
+  /// back in once it is again, until within kReturned of its target [s]: the hold, not the
+  /// target, moved it.
   static constexpr double kBlockedFade = 0.3;
+  static constexpr double kReturned = 0.05;
   /// Lowest wave frequency relative to min_frequency (the lowest peak searched): a wind sea or a
   /// swell holds almost no energy below 0.6 times its peak frequency [-].
   static constexpr double kBandEdge = 0.6;
@@ -164,6 +170,7 @@ private:
   double residual_samples_ = 0.0;     ///< in residual_band_variance_ since the lock
   double samples_ = 0.0;              ///< in noise_variance_ and low_variance_
   double weight_ = 0.0;
+  bool returning_ = false;       ///< a horizontal share held off has not yet returned to its target
   double spectral_share_ = 0.0;  ///< of the spectral estimate against the fixed filter
   std::array<double, 2> low_{};  ///< the broadband output below the wave band
   double low_variance_ = 0.0;

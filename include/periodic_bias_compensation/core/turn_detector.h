@@ -16,6 +16,10 @@
 //   in waves keeps its share; a steady turn raises the spread to about 0.2 of its rate. Without a
 //   measured attitude (one level frame) the share stays off: the hull's roll and pitch leak
 //   g sin(angle) into the level axes in the wave band.
+// - Does the horizontal spectrum record hold a manoeuvre? A turn until kAfterTurn after it, and
+//   a sample without a measured attitude; the start and the sea's yaw (the rate beyond its
+//   threshold in a tail of the sea's spread, or before that spread is measured) hold the share
+//   off but leave the record as it is.
 //
 // Threading: not thread-safe; the owner serialises calls.
 #pragma once
@@ -48,7 +52,7 @@ public:
   static constexpr double kYawSpreadAveraging = 300.0;
   static constexpr double kYawSpreads = 3.0;
   /// Time after a yaw that is no turn without a horizontal share [s].
-  static constexpr double kAfterYaw = 5.0;
+  static constexpr double kAfterYaw = 2.0;
   /// Heading change of the moving mean that makes a turn [rad], and that mean's time constant [s].
   static constexpr double kRecordTurn = 0.35;
   static constexpr double kHeadingAveraging = 10.0;
@@ -75,10 +79,23 @@ public:
   /// The horizontal axes may take a broadband wave share.
   bool horizontalShareAllowed() const
   {
-    return since_start_ >= kAfterStart && since_turn_ >= (turn_confirmed_ ? kAfterTurn : kAfterYaw);
+    return since_start_ >= kAfterStart && !manoeuvring();
+  }
+  /// The horizontal records take a manoeuvre now: a turn (the heading mean moved) until
+  /// kAfterTurn after it, or no measured attitude. The start and a yaw the heading mean does not
+  /// follow (the sea's, which exceeds the yaw rate's threshold before its spread is measured)
+  /// hold the share off but are none.
+  bool recordManoeuvre() const
+  {
+    return !attitude_measured_ || (turn_confirmed_ && since_turn_ < kAfterTurn);
   }
 
 private:
+  /// A turn, a yaw or a missing attitude holds the share off.
+  bool manoeuvring() const
+  {
+    return since_turn_ < (turn_confirmed_ ? kAfterTurn : kAfterYaw);
+  }
   void followHeading(double heading, double dt);
   void followYawRate(double yaw_rate, double dt);
 
@@ -95,5 +112,6 @@ private:
   double heading_mean_ = 0.0;         ///< its moving mean over kHeadingAveraging [rad]
   double record_heading_ = 0.0;       ///< heading_mean_ when the current record began [rad]
   bool turned_ = false;
+  bool attitude_measured_ = true;  ///< the last sample came with an attitude
 };
 }  // namespace periodic_bias_compensation
