@@ -35,6 +35,7 @@ void BroadbandWave::reset()
   difference_variance_ = 0.0;
   residual_samples_ = 0.0;
   samples_ = 0.0;
+  elapsed_ = 0.0;
   weight_ = 0.0;
   returning_ = false;
   spectral_share_ = 0.0;
@@ -90,6 +91,7 @@ BroadbandWaveOutput BroadbandWave::update(const BroadbandWaveInput& in)
     // Plain means over the first minute, then moving ones (an exponential mean started at zero
     // would read low for a minute).
     samples_ += 1.0;
+    elapsed_ += dt;
     const double average = std::max(minute, 1.0 / samples_);
     // White noise of variance sigma^2 per sample: E[(a_k - a_k-1)^2] = 2 sigma^2 (a wave changes
     // little in one sample).
@@ -162,7 +164,8 @@ BroadbandWaveOutput BroadbandWave::update(const BroadbandWaveInput& in)
   // noise-equivalent bandwidth of the chain (omega_h / 5 for two high-passes, 2 omega_h / 5 for
   // four; T at most twice kAveraging once the mean moves): a miss counts only beyond
   // kMissSignificance such scatters. On a narrow sea the broadband error is small, and any excess
-  // would otherwise open the share. A horizontal share waits TurnDetector::kAfterStart, past both.
+  // would otherwise open the share. A horizontal axis measures no miss for kResidualSettling, past
+  // both.
   double measured_missed = residual_band_variance_[four_passes ? kFourPasses : kTwoPasses];
   double significant = noise;
   if (vertical_)
@@ -176,7 +179,8 @@ BroadbandWaveOutput BroadbandWave::update(const BroadbandWaveInput& in)
   }
   const double missed = std::max(0.0, measured_missed - significant);
   const double broadband = out.position_variance + std::max(low_variance_, low_.back() * low_.back());
-  double target = missed > 0.0 ? missed / (missed + broadband) : 0.0;
+  const bool miss_measured = vertical_ || elapsed_ >= kResidualSettling;
+  double target = missed > 0.0 && miss_measured ? missed / (missed + broadband) : 0.0;
   // The residual sees only the wave band: bias wander below it never opens the share. But a model
   // locked elsewhere fits the acceleration and still turns it into the wrong displacement (it
   // divides by its own frequency squared), and the high-passes take part of a swell near the

@@ -62,7 +62,6 @@ void TurnDetector::followYawRate(double yaw_rate, double dt)
   const bool yawing = std::abs(turn_rate_) > threshold || turned_;
   since_turn_ = yawing ? 0.0 : since_turn_ + dt;
   since_yaw_ = yawing ? 0.0 : since_yaw_ + dt;
-  since_start_ += dt;
   if (turned_)
     turn_confirmed_ = true;
   else if (since_turn_ >= kAfterTurn)

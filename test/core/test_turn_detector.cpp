@@ -22,6 +22,7 @@ struct ShareRecord
   double first_allowed = -1.0;    ///< first time it was allowed [s]
   double first_forbidden = -1.0;  ///< first time it was not [s]
   double last_forbidden = -1.0;   ///< last time it was not [s]
+  double manoeuvre_time = 0.0;    ///< total time the records took a manoeuvre [s]
 };
 
 /// Feeds `seconds` of the heading `heading(t)` [rad, unwrapped] with its rate by difference.
@@ -37,6 +38,7 @@ ShareRecord feed(TurnDetector* detector, double seconds, const std::function<dou
     detector->update(std::remainder(heading(t), 2.0 * M_PI), yaw_rate, i == 0 && t0 == 0.0 ? 0.0 : dt,
                      attitude_measured);
     run.turns += detector->turned() ? 1 : 0;
+    run.manoeuvre_time += detector->recordManoeuvre() ? dt : 0.0;
     if (detector->horizontalShareAllowed())
     {
       run.allowed_time += dt;
@@ -63,15 +65,17 @@ TEST(TurnDetector, HeadingOfAnAttitudeIsItsYaw)
   EXPECT_NEAR(headingOf(Eigen::Quaterniond(Eigen::AngleAxisd(-3.0, Eigen::Vector3d::UnitZ()))), -3.0, 1e-12);
 }
 
-// A moored buoy yawing 0.3 rad at 10 s about a heading across the +-pi seam: no turn, and the
-// share is allowed from kAfterStart on, all the time.
+// A moored buoy yawing 0.3 rad at 10 s about a heading across the +-pi seam: no turn, no
+// manoeuvre of the records, and the share held off only while the sea's spread is first measured
+// (within the first minute).
 TEST(TurnDetector, YawOfTheSeaIsNoTurn)
 {
   TurnDetector detector;
   const ShareRecord run = feed(&detector, 900.0, [](double t) { return M_PI + 0.3 * std::sin(2.0 * M_PI * 0.1 * t); });
   EXPECT_EQ(run.turns, 0);
-  EXPECT_NEAR(run.first_allowed, TurnDetector::kAfterStart, 1.0);
-  EXPECT_NEAR(run.allowed_time, 900.0 - TurnDetector::kAfterStart, 1.0);
+  EXPECT_EQ(run.manoeuvre_time, 0.0);
+  EXPECT_GE(run.first_forbidden, 0.0) << "held while the spread is measured";
+  EXPECT_LT(run.last_forbidden, 60.0);
 }
 
 // A 90 degree turn at 0.03 rad/s after 300 s of steady heading: it is told as a turn (more than
@@ -118,16 +122,22 @@ TEST(TurnDetector, NoAttitudeNoShare)
   EXPECT_EQ(run.allowed_time, 0.0);
 }
 
-// reset() starts over: the start hold applies again.
-TEST(TurnDetector, ResetStartsTheHoldAgain)
+// A steady heading allows the share kAfterYaw after the first sample (the yaw rate's mean starts
+// there); reset() forgets a turn's hold.
+TEST(TurnDetector, ResetForgetsATurn)
 {
   TurnDetector detector;
-  feed(&detector, 200.0, [](double) { return 0.0; });
-  ASSERT_TRUE(detector.horizontalShareAllowed());
+  const auto heading = [](double t) { return 0.03 * std::min(t, 50.0); };
+  const ShareRecord steady = feed(&detector, 200.0, [](double) { return 0.0; });
+  EXPECT_NEAR(steady.first_allowed, TurnDetector::kAfterYaw, 0.05);
+  EXPECT_LT(steady.last_forbidden, TurnDetector::kAfterYaw);
+  feed(&detector, 60.0, heading, true, 200.0);
+  ASSERT_FALSE(detector.horizontalShareAllowed());
   detector.reset();
-  const ShareRecord run = feed(&detector, 200.0, [](double) { return 2.0; });
+  const ShareRecord run = feed(&detector, 10.0, [](double) { return 1.5; });
   EXPECT_EQ(run.turns, 0);
-  EXPECT_NEAR(run.first_allowed, TurnDetector::kAfterStart, 1.0);
+  EXPECT_NEAR(run.first_allowed, TurnDetector::kAfterYaw, 0.05);
+  EXPECT_LT(run.last_forbidden, TurnDetector::kAfterYaw);
 }
 // sinceYaw() counts from the last sample beyond the turn rate, with or without a measured
 // attitude: large before any yaw, zero while the ship turns, then the time since the turn ended
@@ -149,24 +159,20 @@ TEST(TurnDetector, SinceYawCountsFromTheLastYaw)
   }
 }
 
-// The start and the sea's yaw hold the share off but are no manoeuvre of the records; a turn
-// until kAfterTurn after it, and a missing attitude, are.
+// The sea's yaw holds the share off but is no manoeuvre of the records; a turn until kAfterTurn
+// after it, and a missing attitude, are.
 TEST(TurnDetector, RecordManoeuvresAreTurnsAndMissingAttitudes)
 {
-  TurnDetector steady;
-  feed(&steady, 0.5 * TurnDetector::kAfterStart, [](double) { return 0.3; });
-  EXPECT_FALSE(steady.horizontalShareAllowed());
-  EXPECT_FALSE(steady.recordManoeuvre());
-
   TurnDetector yawing;
-  feed(&yawing, 0.5 * TurnDetector::kAfterStart, [](double t) { return 0.1 * std::sin(0.8 * t); });
-  EXPECT_FALSE(yawing.horizontalShareAllowed());
-  EXPECT_FALSE(yawing.recordManoeuvre());
+  const ShareRecord yaw = feed(&yawing, 30.0, [](double t) { return 0.1 * std::sin(0.8 * t); });
+  EXPECT_GT(yaw.allowed_time, 0.0);
+  EXPECT_LT(yaw.allowed_time, 30.0) << "held while the spread is measured";
+  EXPECT_EQ(yaw.manoeuvre_time, 0.0);
 
   TurnDetector blind;
-  feed(
-      &blind, 0.5 * TurnDetector::kAfterStart, [](double) { return 0.3; }, false);
-  EXPECT_TRUE(blind.recordManoeuvre());
+  const ShareRecord dark = feed(
+      &blind, 30.0, [](double) { return 0.3; }, false);
+  EXPECT_NEAR(dark.manoeuvre_time, 30.0, 0.1);
 
   TurnDetector turning;
   const auto heading = [](double t) { return t < 300.0 ? 0.0 : 0.03 * std::min(t - 300.0, 50.0); };

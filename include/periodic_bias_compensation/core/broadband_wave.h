@@ -96,6 +96,11 @@ class BroadbandWave
 public:
   /// Time constant of the variances that weigh the broadband estimate [s].
   static constexpr double kAveraging = 60.0;
+  /// Time from the start during which a horizontal axis's miss is not measured from the residual
+  /// [s]: the measure still holds the lock's first transients (about 1.4 cm said missed on a
+  /// sinusoid), and a narrow sea would open the share on them. Its share opens then only on the
+  /// spectral design's own evidence: a sea away from the lock, or no lock.
+  static constexpr double kResidualSettling = 60.0;
   /// Smallest share; below it, none [-]: a few percent gain little and add that share of
   /// everything below the wave band, which can be metres of bias wander.
   static constexpr double kMinWeight = 0.1;
@@ -169,6 +174,7 @@ private:
   double difference_variance_ = 0.0;  ///< of harmonic less broadband displacement, since the lock
   double residual_samples_ = 0.0;     ///< in residual_band_variance_ since the lock
   double samples_ = 0.0;              ///< in noise_variance_ and low_variance_
+  double elapsed_ = 0.0;              ///< time since the start [s]
   double weight_ = 0.0;
   bool returning_ = false;       ///< a horizontal share held off has not yet returned to its target
   double spectral_share_ = 0.0;  ///< of the spectral estimate against the fixed filter

@@ -1,6 +1,6 @@
 // Turns told from the yaw a sea induces (estimation core, no ROS).
 //
-// The wave estimate asks two things of the heading:
+// The wave estimate asks three things of the heading:
 // - Has the ship turned? Then every encounter frequency has moved and the vertical spectrum
 //   record describes another sea: it begins anew. A turn is a change of the heading's moving mean
 //   (kHeadingAveraging) by kRecordTurn; the yaw a sea induces (degrees to tens of degrees on a
@@ -10,16 +10,14 @@
 //   kTurnRate and beyond kYawSpreads times the spread the sea gives it (its deviation from the
 //   kSustainedTurnAveraging mean, over kYawSpreadAveraging) holds the share off while it lasts
 //   and kAfterYaw after; after a heading change (a turn, not a yaw of the sea) kAfterTurn (the
-//   spectral FIR spans up to that: it would still read the sea before the turn); after the start
-//   kAfterStart (WienerHeave's FIR reads only the input it holds, but the measure of what the
-//   harmonic model misses still holds its lock's first transients). A vessel that yaws by degrees
-//   in waves keeps its share; a steady turn raises the spread to about 0.2 of its rate. Without a
-//   measured attitude (one level frame) the share stays off: the hull's roll and pitch leak
-//   g sin(angle) into the level axes in the wave band.
+//   spectral FIR spans up to that: it would still read the sea before the turn). A vessel that
+//   yaws by degrees in waves keeps its share; a steady turn raises the spread to about 0.2 of its
+//   rate. Without a measured attitude (one level frame) the share stays off: the hull's roll and
+//   pitch leak g sin(angle) into the level axes in the wave band.
 // - Does the horizontal spectrum record hold a manoeuvre? A turn until kAfterTurn after it, and
-//   a sample without a measured attitude; the start and the sea's yaw (the rate beyond its
-//   threshold in a tail of the sea's spread, or before that spread is measured) hold the share
-//   off but leave the record as it is.
+//   a sample without a measured attitude; the sea's yaw (the rate beyond its threshold in a tail
+//   of the sea's spread, or before that spread is measured) holds the share off but leaves the
+//   record as it is.
 //
 // Threading: not thread-safe; the owner serialises calls.
 #pragma once
@@ -43,8 +41,6 @@ public:
   static constexpr double kTurnRate = 0.008;
   /// Time after a turn without a horizontal share [s].
   static constexpr double kAfterTurn = 120.0;
-  /// Time after the start without a horizontal share [s].
-  static constexpr double kAfterStart = 60.0;
   /// The longer yaw rate mean a turn is told by on a vessel that yaws in waves [s], the time over
   /// which the sea's spread of the 2 s mean about it is measured [s], and how many such spreads
   /// make a turn [-].
@@ -79,12 +75,12 @@ public:
   /// The horizontal axes may take a broadband wave share.
   bool horizontalShareAllowed() const
   {
-    return since_start_ >= kAfterStart && !manoeuvring();
+    return !manoeuvring();
   }
   /// The horizontal records take a manoeuvre now: a turn (the heading mean moved) until
-  /// kAfterTurn after it, or no measured attitude. The start and a yaw the heading mean does not
-  /// follow (the sea's, which exceeds the yaw rate's threshold before its spread is measured)
-  /// hold the share off but are none.
+  /// kAfterTurn after it, or no measured attitude. A yaw the heading mean does not follow (the
+  /// sea's, which exceeds the yaw rate's threshold before its spread is measured) holds the share
+  /// off but is none.
   bool recordManoeuvre() const
   {
     return !attitude_measured_ || (turn_confirmed_ && since_turn_ < kAfterTurn);
@@ -104,7 +100,6 @@ private:
   double yaw_spread_ = 0.0;           ///< mean square of turn_rate_ less sustained_turn_rate_ [rad^2/s^2]
   double yaw_samples_ = 0.0;          ///< samples in yaw_spread_'s mean
   bool turn_confirmed_ = false;       ///< the heading turned since the share was last allowed
-  double since_start_ = 0.0;          ///< time since the first sample [s]
   double since_turn_ = 0.0;           ///< time since the last turn or yaw beyond the threshold [s]
   double since_yaw_ = 1e9;            ///< the same, whether the attitude is measured or not [s]
   long heading_samples_ = 0;          ///< samples in the heading mean
