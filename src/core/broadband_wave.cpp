@@ -202,8 +202,11 @@ BroadbandWaveOutput BroadbandWave::update(const BroadbandWaveInput& in)
       std::abs(in.frequency - peak) > kOffPeak * peak)
     target = 1.0;
   // Without a lock the harmonic model's output is none: a design that holds a sea, with an output
-  // kSeaOverError times the broadband error, is then the whole output.
-  if (!in.locked && holds_sea && output_over_error)
+  // kSeaOverError times the broadband error, is then the whole output. Not on a horizontal axis's
+  // first minute: a short record of a hand's or a rig's motion reads as a sea there (the x-io
+  // recordings, docs/benchmarks.md), and a broad sea holds a lock away from its displacement's
+  // peak, which opens the share above.
+  if (!in.locked && holds_sea && output_over_error && miss_measured)
     target = 1.0;
   // What the harmonic model's displacement misses: with a lock, what the residual or the difference
   // says; without one its output is none, so the whole wave. Velocity in proportion, at the

@@ -169,6 +169,20 @@ TEST(BroadbandWave, HorizontalOnlySpectralAndBlockable)
   EXPECT_LT(largest, 0.05);
 }
 
+// Horizontally, for the first kResidualSettling of a run, a design without a lock is no sea (a
+// short record of a hand's or a rig's motion reads as one): no share before, the whole share
+// after, on the same broad sea.
+TEST(BroadbandWave, NoLockNoHorizontalShareInTheFirstMinute)
+{
+  const BroadSea sea(0.5, 5);
+  BroadbandWave wave(false);
+  std::mt19937_64 rng(5);
+  double t = 0.0, largest = 0.0;
+  feed(&wave, &sea, BroadbandWave::kResidualSettling - 1.0, true, &t, &rng, &largest, false);
+  EXPECT_EQ(largest, 0.0);
+  EXPECT_GT(feed(&wave, &sea, 30.0, true, &t, &rng, nullptr, false).weight, 0.9);
+}
+
 // A hold that ends (the sea's yaw, a turn's hold run out): the share returns as fast as it left,
 // within a second and a half, not at the pace that smooths its target (kWeightTime, 2 s).
 TEST(BroadbandWave, HeldShareReturnsAsFastAsItLeft)

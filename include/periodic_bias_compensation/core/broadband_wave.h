@@ -98,8 +98,9 @@ public:
   static constexpr double kAveraging = 60.0;
   /// Time from the start during which a horizontal axis's miss is not measured from the residual
   /// [s]: the measure still holds the lock's first transients (about 1.4 cm said missed on a
-  /// sinusoid), and a narrow sea would open the share on them. Its share opens then only on the
-  /// spectral design's own evidence: a sea away from the lock, or no lock.
+  /// sinusoid), and a narrow sea would open the share on them. Its share opens then only when the
+  /// spectral design holds a sea away from the lock (nor on a design without a lock: a short
+  /// record of a hand's or a rig's motion reads as a sea).
   static constexpr double kResidualSettling = 60.0;
   /// Smallest share; below it, none [-]: a few percent gain little and add that share of
   /// everything below the wave band, which can be metres of bias wander.
