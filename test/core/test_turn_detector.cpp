@@ -139,6 +139,7 @@ TEST(TurnDetector, ResetForgetsATurn)
   EXPECT_NEAR(run.first_allowed, TurnDetector::kAfterYaw, 0.05);
   EXPECT_LT(run.last_forbidden, TurnDetector::kAfterYaw);
 }
+
 // sinceYaw() counts from the last sample beyond the turn rate, with or without a measured
 // attitude: large before any yaw, zero while the ship turns, then the time since the turn ended
 // (the 2 s mean rate falls below kTurnRate within a few seconds of it).

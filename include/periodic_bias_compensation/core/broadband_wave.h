@@ -68,7 +68,7 @@ struct BroadbandWaveInput
   double frequency = 0.0;          ///< the lock's frequency [Hz] (with a lock)
   bool allowed = true;             ///< a horizontal axis may take a broadband share now
   /// The horizontal record takes a manoeuvre now (by default whenever the share is not allowed;
-  /// the start and the sea's yaw hold the share off but are none).
+  /// the sea's yaw holds the share off but is none).
   bool manoeuvre = true;
   bool turning = false;  ///< the heading has moved: the sea as met changed, its spectrum is measured anew
   double dt = 0.0;       ///< [s] since the previous sample (0: the first)
@@ -110,9 +110,9 @@ public:
   /// Time constant with which the share follows its target [s]: never a step.
   static constexpr double kWeightTime = 2.0;
   /// Time constant with which a horizontal share fades out when it is no longer allowed, and
-  /// back in once it is again, until within kReturned of its target [s]: the hold, not the
-  /// target, moved it.
+  /// back in once it is again [s]: the hold, not the target, moved it.
   static constexpr double kBlockedFade = 0.3;
+  /// Distance from its target within which a returning share is back [-]; then kWeightTime again.
   static constexpr double kReturned = 0.05;
   /// Lowest wave frequency relative to min_frequency (the lowest peak searched): a wind sea or a
   /// swell holds almost no energy below 0.6 times its peak frequency [-].
