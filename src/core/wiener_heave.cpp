@@ -471,12 +471,18 @@ void WienerHeave::design(double noise_density_squared)
   next->wave_variance = sea.displacement_variance;
   next->velocity_error_variance = std::max(0.0, sea.velocity_variance - explained_velocity);
   next->mean = means;
-  // With companions, a record of kCrossSegments Welch segments and no manoeuvre in it, the
-  // design that reads all three inputs where it expects less error.
+  // With companions and no manoeuvre in the record, the design that reads all three inputs where
+  // it expects less error: on the vertical axis once the record holds kCrossSegments Welch
+  // segments, on a horizontal one kHorizontalCrossSegments where its own design holds a sea.
   const double segments = std::floor(static_cast<double>(n - kSegment) / (kSegment / 2)) + 1.0;
+  const bool companions = channels_used_ > 1 && std::min(since_manoeuvre_, since_gap_) >= length;
   Design joint;
-  if (channels_used_ > 1 && std::min(since_manoeuvre_, since_gap_) >= length && segments >= kCrossSegments &&
-      companionDesign(sea, fit, means, &joint) && joint.error_variance < next->error_variance)
+  const bool joint_made =
+      companions &&
+      (vertical_ ? segments >= kCrossSegments && companionDesign(sea, fit, means, &joint)
+                 : segments >= kHorizontalCrossSegments && next->wave_variance > kCompanionSea * next->error_variance &&
+                       welchCompanionDesign(means, noise_density_squared, &joint));
+  if (joint_made && joint.error_variance < next->error_variance)
     *next = std::move(joint);
   previous_ = std::move(current_);
   current_ = std::move(next);
@@ -484,25 +490,22 @@ void WienerHeave::design(double noise_density_squared)
   fade_ = previous_ ? 0.0 : 1.0;
 }
 
-bool WienerHeave::companionDesign(const Wave& sea, const Statistics& own, const std::array<double, kChannels>& mean,
-                                  Design* next) const
+WienerHeave::SpectralMatrix WienerHeave::welchMatrix(const std::array<double, kChannels>& mean, int* segments) const
 {
   using Complex = std::complex<double>;
   RealFft& fft = *transform_.fft;
   const int n = static_cast<int>(record().size());
   const double fs = 1.0 / (decimation_ * dt_);
   const int bins = kDftSize / 2 + 1;
-  const double df = fs / kDftSize;
-  // Welch's spectral matrix of the three inputs, S_ab = E[U_a conj(U_b)] (the segments of welch()).
   double window_power = 0.0;
   const std::vector<double> window = hannWindow(kSegment, &window_power);
-  std::array<std::array<std::vector<Complex>, kChannels>, kChannels> welch_matrix;
+  SpectralMatrix matrix;
   for (int a = 0; a < kChannels; ++a)
-    for (int b = a; b < kChannels; ++b)
-      welch_matrix[a][b].assign(bins, 0.0);
+    for (int b = 0; b < kChannels; ++b)
+      matrix[a][b].assign(bins, 0.0);
   std::array<std::vector<Complex>, kChannels> transform;
-  int segments = 0;
-  for (int start = n - kSegment; start >= 0; start -= kSegment / 2, ++segments)
+  *segments = 0;
+  for (int start = n - kSegment; start >= 0; start -= kSegment / 2, ++*segments)
   {
     for (int c = 0; c < kChannels; ++c)
     {
@@ -517,39 +520,26 @@ bool WienerHeave::companionDesign(const Wave& sea, const Statistics& own, const 
     for (int a = 0; a < kChannels; ++a)
       for (int b = a; b < kChannels; ++b)
         for (int k = 0; k < bins; ++k)
-          welch_matrix[a][b][k] += transform[a][k] * std::conj(transform[b][k]);
+          matrix[a][b][k] += transform[a][k] * std::conj(transform[b][k]);
   }
-  const double normalisation = 1.0 / (segments * window_power * fs);
-  // The matrix designed from: the own estimate on the diagonal (Welch's for the companions), each
-  // cross-spectrum shrunk by how far its coherence stands above chance, 2 / K for K segments, the
-  // own input's scaled to the own estimate (its coherence kept).
-  const double chance = 2.0 / segments;
-  std::array<std::array<std::vector<Complex>, kChannels>, kChannels> matrix;
+  const double normalisation = 1.0 / (*segments * window_power * fs);
   for (int a = 0; a < kChannels; ++a)
-    for (int b = 0; b < kChannels; ++b)
-      matrix[a][b].assign(bins, 0.0);
-  for (int k = 0; k < bins; ++k)
-  {
-    std::array<double, kChannels> auto_density{};
-    for (int c = 0; c < kChannels; ++c)
-      auto_density[c] = welch_matrix[c][c][k].real() * normalisation;
-    const double own_scale = auto_density[0] > 0.0 ? std::sqrt(sea.density[k] / auto_density[0]) : 0.0;
-    matrix[0][0][k] = sea.density[k];
-    for (int c = 1; c < kChannels; ++c)
-      matrix[c][c][k] = auto_density[c];
-    for (int a = 0; a < kChannels; ++a)
-      for (int b = a + 1; b < kChannels; ++b)
+    for (int b = a; b < kChannels; ++b)
+      for (int k = 0; k < bins; ++k)
       {
-        const Complex cross = welch_matrix[a][b][k] * normalisation;
-        const double product = auto_density[a] * auto_density[b];
-        const double coherence = product > 0.0 ? std::norm(cross) / product : 0.0;
-        const double weight = std::clamp((coherence - chance) / (1.0 - chance), 0.0, 1.0);
-        matrix[a][b][k] = weight * (a == 0 ? own_scale : 1.0) * cross;
+        matrix[a][b][k] *= normalisation;
         matrix[b][a][k] = std::conj(matrix[a][b][k]);
       }
-  }
-  const int taps =
-      std::min(static_cast<int>(own.autocorrelation.size()), static_cast<int>(std::lround(kCrossSpan * fs)));
+  return matrix;
+}
+
+bool WienerHeave::solveJoint(const SpectralMatrix& matrix, const std::vector<double>& own_autocorrelation,
+                             const Wave& sea, const Statistics& own, int taps, double loading, bool bounded,
+                             const std::array<double, kChannels>& mean, Design* next) const
+{
+  using Complex = std::complex<double>;
+  const double fs = 1.0 / (decimation_ * dt_);
+  const double df = fs / kDftSize;
   // The normal equations sum_j E[u(n - i) u(n - j)^T] h_j = E[x(n) u(n - i)]: block (i, j) is
   // R(j - i), R(lag)(a, b) = E[u_a(n) u_b(n - lag)], so block r[lag] = R(lag)^T; the right-hand
   // sides E[x(n) u_c(n - lag)], the displacement's cross-spectrum with companion c
@@ -559,10 +549,36 @@ bool WienerHeave::companionDesign(const Wave& sea, const Statistics& own, const 
   for (int a = 0; a < kChannels; ++a)
     for (int b = 0; b < kChannels; ++b)
     {
-      const std::vector<double> r =
-          a == 0 && b == 0 ? own.autocorrelation : correlation([&](int k) { return matrix[a][b][k] * df; }, taps);
+      const std::vector<double> r = a == 0 && b == 0 && !own_autocorrelation.empty()
+                                        ? own_autocorrelation
+                                        : correlation([&](int k) { return matrix[a][b][k] * df; }, taps);
       for (int lag = 0; lag < taps; ++lag)
         blocks[lag](b, a) = r[lag];
+    }
+  const double white = loading * blocks[0].trace() / kChannels;
+  for (int c = 0; c < kChannels; ++c)
+    blocks[0](c, c) += white;
+  // The companions' cross-spectra with the own input say at most the own wave: where they would
+  // explain more of it (p C^-1 p^H, p the row of cross-spectra, C the companions' matrix) than the
+  // wave holds, the noise floor taken off, they are scaled to it.
+  const int bins = kDftSize / 2 + 1;
+  std::vector<double> bound(bins, 1.0);
+  if (bounded)
+    for (int k = 1; k < bins; ++k)
+    {
+      const Complex p1 = matrix[0][1][k], p2 = matrix[0][2][k];
+      const Complex c11 = matrix[1][1][k], c12 = matrix[1][2][k], c21 = matrix[2][1][k], c22 = matrix[2][2][k];
+      const Complex determinant = c11 * c22 - c12 * c21;
+      if (!(std::abs(determinant) > 0.0))
+        continue;
+      // p C^-1 p^H with C^-1 = [c22 -c12; -c21 c11] / det.
+      const double explained =
+          ((p1 * (c22 * std::conj(p1) - c12 * std::conj(p2)) + p2 * (c11 * std::conj(p2) - c21 * std::conj(p1))) /
+           determinant)
+              .real();
+      const double held = sea.wave[k] * sea.gain[k] * sea.gain[k];
+      if (explained > held)
+        bound[k] = std::sqrt(held / explained);
     }
   Eigen::MatrixXd rhs(3 * taps, 2);
   for (int c = 0; c < kChannels; ++c)
@@ -573,7 +589,7 @@ bool WienerHeave::companionDesign(const Wave& sea, const Statistics& own, const 
       if (k == 0 || !(sea.wave[k] > 0.0))
         return Complex(0.0);
       const double omega = 2.0 * M_PI * k * df;
-      return -matrix[0][c][k] / (omega * omega * lowPass(sea.gain[k], omega));
+      return -bound[k] * matrix[0][c][k] / (omega * omega * lowPass(sea.gain[k], omega));
     };
     const std::vector<double> position = correlation([&](int k) { return displacement_cross(k) * df; }, taps);
     const std::vector<double> velocity =
@@ -587,7 +603,8 @@ bool WienerHeave::companionDesign(const Wave& sea, const Statistics& own, const 
   Eigen::MatrixXd solution;
   if (!solveBlockToeplitz(blocks, rhs, &solution))
     return false;
-  // The expected errors, var(x) - h r as for one input.
+  // The expected errors, var(x) - h r as for one input (with white noise added to the inputs,
+  // h^T W h above the error of these taps in the spectrum designed from).
   const Eigen::Vector2d explained = (solution.cwiseProduct(rhs)).colwise().sum();
   next->error_variance = std::max(0.0, sea.displacement_variance - explained[0]);
   next->velocity_error_variance = std::max(0.0, sea.velocity_variance - explained[1]);
@@ -604,6 +621,64 @@ bool WienerHeave::companionDesign(const Wave& sea, const Statistics& own, const 
     }
   }
   return true;
+}
+
+bool WienerHeave::companionDesign(const Wave& sea, const Statistics& own, const std::array<double, kChannels>& mean,
+                                  Design* next) const
+{
+  const int bins = kDftSize / 2 + 1;
+  int segments = 0;
+  const SpectralMatrix welch_matrix = welchMatrix(mean, &segments);
+  // The matrix designed from: the own estimate on the diagonal (Welch's for the companions), each
+  // cross-spectrum shrunk by how far its coherence stands above chance, 2 / K for K segments, the
+  // own input's scaled to the own estimate (its coherence kept).
+  const double chance = 2.0 / segments;
+  SpectralMatrix matrix;
+  for (int a = 0; a < kChannels; ++a)
+    for (int b = 0; b < kChannels; ++b)
+      matrix[a][b].assign(bins, 0.0);
+  for (int k = 0; k < bins; ++k)
+  {
+    std::array<double, kChannels> auto_density{};
+    for (int c = 0; c < kChannels; ++c)
+      auto_density[c] = welch_matrix[c][c][k].real();
+    const double own_scale = auto_density[0] > 0.0 ? std::sqrt(sea.density[k] / auto_density[0]) : 0.0;
+    matrix[0][0][k] = sea.density[k];
+    for (int c = 1; c < kChannels; ++c)
+      matrix[c][c][k] = auto_density[c];
+    for (int a = 0; a < kChannels; ++a)
+      for (int b = a + 1; b < kChannels; ++b)
+      {
+        const std::complex<double> cross = welch_matrix[a][b][k];
+        const double product = auto_density[a] * auto_density[b];
+        const double coherence = product > 0.0 ? std::norm(cross) / product : 0.0;
+        const double weight = std::clamp((coherence - chance) / (1.0 - chance), 0.0, 1.0);
+        matrix[a][b][k] = weight * (a == 0 ? own_scale : 1.0) * cross;
+        matrix[b][a][k] = std::conj(matrix[a][b][k]);
+      }
+  }
+  const double fs = 1.0 / (decimation_ * dt_);
+  const int taps =
+      std::min(static_cast<int>(own.autocorrelation.size()), static_cast<int>(std::lround(kCrossSpan * fs)));
+  return solveJoint(matrix, own.autocorrelation, sea, own, taps, 0.0, false, mean, next);
+}
+
+bool WienerHeave::welchCompanionDesign(const std::array<double, kChannels>& mean, double noise_density_squared,
+                                       Design* next) const
+{
+  // The own input's wave in Welch's density of the matrix's segments (the noise floor and what the
+  // band owes the lines below it taken off): one estimate throughout, no mix of resolutions.
+  std::vector<double> response;
+  const Wave sea = wave(welch(kSegment, mean[0], &response), response, noise_density_squared, Estimate::kWelch);
+  const Statistics own = statistics(sea);
+  if (own.autocorrelation.empty())
+    return false;
+  int segments = 0;
+  const SpectralMatrix matrix = welchMatrix(mean, &segments);
+  const double fs = 1.0 / (decimation_ * dt_);
+  const int taps =
+      std::min(static_cast<int>(own.autocorrelation.size()), static_cast<int>(std::lround(kCrossSpan * fs)));
+  return solveJoint(matrix, {}, sea, own, taps, kLoading, true, mean, next);
 }
 
 }  // namespace periodic_bias_compensation

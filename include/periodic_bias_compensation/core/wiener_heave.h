@@ -106,6 +106,15 @@ public:
   static constexpr int kCrossSegments = 6;
   /// Span of the other inputs' FIRs, and of the own input's in a design that reads them [s].
   static constexpr double kCrossSpan = 60.0;
+  /// Welch segments a horizontal record holds before the other axes are read: its design reads
+  /// Welch's matrix alone, white noise added, which bears a short record's chance coherence [-].
+  static constexpr int kHorizontalCrossSegments = 2;
+  /// White noise added to every input of a horizontal design that reads the other axes, a share of
+  /// the inputs' mean variance: the taps fit no coherence a few segments hold by chance [-].
+  static constexpr double kLoading = 2e-3;
+  /// A horizontal axis reads the other axes where its own design holds a sea: its wave this many
+  /// times the design's expected error (at rest the others' slow drifts would make one) [-].
+  static constexpr double kCompanionSea = 2.0;
   /// The other two level axes' accelerations, as update() takes them.
   using Companions = std::array<double, 2>;
 
@@ -252,6 +261,22 @@ private:
   /// into *next (its taps and expected errors); false when the equations are not well posed.
   bool companionDesign(const Wave& sea, const Statistics& own, const std::array<double, kChannels>& mean,
                        Design* next) const;
+  /// The design that reads the companions from Welch's matrix alone (the own input's wave
+  /// included) with white noise of kLoading added to every input: a horizontal axis's.
+  bool welchCompanionDesign(const std::array<double, kChannels>& mean, double noise_density_squared,
+                            Design* next) const;
+  using SpectralMatrix = std::array<std::array<std::vector<std::complex<double>>, kChannels>, kChannels>;
+  /// Welch's spectral matrix of the inputs less `mean`, S_ab = E[U_a conj(U_b)] two-sided at
+  /// kDftSize / 2 + 1 frequencies (Hann segments of kSegment, half overlap), and its *segments.
+  SpectralMatrix welchMatrix(const std::array<double, kChannels>& mean, int* segments) const;
+  /// Solves the block-Toeplitz normal equations of `taps` per input from `matrix` (the own input's
+  /// autocorrelation `own_autocorrelation` where given, else from the matrix), the own input's
+  /// wave `sea` and its statistics `own`, white noise of `loading` times the inputs' mean variance
+  /// added to each input, the companions' cross-spectra `bounded` by the own wave, into *next (taps
+  /// and expected errors); false when not well posed.
+  bool solveJoint(const SpectralMatrix& matrix, const std::vector<double>& own_autocorrelation, const Wave& sea,
+                  const Statistics& own, int taps, double loading, bool bounded,
+                  const std::array<double, kChannels>& mean, Design* next) const;
   void design(double noise_density_squared);
   WienerHeaveOutput step(double a, double period, double noise_density_squared, const Companions* companions);
   void apply(const Design& d, double* x, double* v) const;
