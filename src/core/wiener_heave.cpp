@@ -471,18 +471,19 @@ void WienerHeave::design(double noise_density_squared)
   next->wave_variance = sea.displacement_variance;
   next->velocity_error_variance = std::max(0.0, sea.velocity_variance - explained_velocity);
   next->mean = means;
-  // With companions and no manoeuvre in the record, the design that reads all three inputs where
-  // it expects less error: on the vertical axis once the record holds kCrossSegments Welch
-  // segments, on a horizontal one kHorizontalCrossSegments where its own design holds a sea.
+  // With companions and no manoeuvre in the record, a design that reads all three inputs where it
+  // expects less error: on a horizontal axis Welch's from kHorizontalCrossSegments Welch segments
+  // where its own design holds a sea, and where that one is not taken, as on the vertical axis, the
+  // one from the own estimate once the record holds kCrossSegments.
   const double segments = std::floor(static_cast<double>(n - kSegment) / (kSegment / 2)) + 1.0;
   const bool companions = channels_used_ > 1 && std::min(since_manoeuvre_, since_gap_) >= length;
   Design joint;
-  const bool joint_made =
-      companions &&
-      (vertical_ ? segments >= kCrossSegments && companionDesign(sea, fit, means, &joint)
-                 : segments >= kHorizontalCrossSegments && next->wave_variance > kCompanionSea * next->error_variance &&
-                       welchCompanionDesign(means, noise_density_squared, &joint));
-  if (joint_made && joint.error_variance < next->error_variance)
+  if (companions && !vertical_ && segments >= kHorizontalCrossSegments &&
+      next->wave_variance > kCompanionSea * next->error_variance &&
+      welchCompanionDesign(means, noise_density_squared, &joint) && joint.error_variance < next->error_variance)
+    *next = std::move(joint);
+  else if (companions && segments >= kCrossSegments && companionDesign(sea, fit, means, &joint) &&
+           joint.error_variance < next->error_variance)
     *next = std::move(joint);
   previous_ = std::move(current_);
   current_ = std::move(next);

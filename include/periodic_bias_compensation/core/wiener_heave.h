@@ -30,15 +30,20 @@
 //  4. applies the FIR at every sample to the low-passed values D samples apart ending at that
 //     sample, so the output has the input's rate; a new design fades in over kDesignFade.
 //
-// With companions (the other two level axes' accelerations, given at every sample), once the
-// record holds kCrossSegments Welch segments and no manoeuvre, a second design reads all three
-// inputs: a sea moves every axis with the same waves, and the other axes' accelerations say what
-// this axis's noise and bias wander hide (on a long-crested sea surge and heave are one wave seen
-// twice). Its spectral matrix is the own estimate above on the diagonal and Welch's
-// cross-spectra beside it, each shrunk by how far its coherence stands above what K segments of
-// unrelated inputs show (weight (C - 2 / K) / (1 - 2 / K), none below), the other inputs' FIRs
-// kCrossSpan long; the block-Toeplitz normal equations are solved by a multichannel Levinson
-// recursion, and the design is taken when its expected error is below the own design's.
+// With companions (the other two level axes' accelerations, given at every sample) and no
+// manoeuvre in the record, a second design reads all three inputs: a sea moves every axis with the
+// same waves, and the other axes' accelerations say what this axis's noise and bias wander hide
+// (on a long-crested sea surge and heave are one wave seen twice). On the vertical axis, once the
+// record holds kCrossSegments Welch segments, its spectral matrix is the own estimate above on the
+// diagonal and Welch's cross-spectra beside it, each shrunk by how far its coherence stands above
+// what K segments of unrelated inputs show (weight (C - 2 / K) / (1 - 2 / K), none below). On a
+// horizontal axis, once the record holds kHorizontalCrossSegments and the own design holds a sea
+// (kCompanionSea), it is Welch's matrix alone, the own wave from Welch's density of the same
+// segments, with white noise of kLoading added to every input and the companions'
+// cross-spectra bounded per bin by the own wave; where that design is not taken, the vertical
+// axis's kind is tried. The other inputs' FIRs are kCrossSpan long; the block-Toeplitz normal
+// equations are solved by a multichannel Levinson recursion, and a design is taken when its
+// expected error is below the own design's.
 //
 // Below min_frequency and under the noise floor the filter passes nothing, so bias wander and
 // white noise are weighted by what the spectrum holds, not by a fixed corner. Until the first
