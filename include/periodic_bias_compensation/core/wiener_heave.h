@@ -267,7 +267,8 @@ private:
   bool companionDesign(const Wave& sea, const Statistics& own, const std::array<double, kChannels>& mean,
                        Design* next) const;
   /// The design that reads the companions from Welch's matrix alone (the own input's wave
-  /// included) with white noise of kLoading added to every input: a horizontal axis's.
+  /// included), white noise of kLoading added to every input and the companions' cross-spectra
+  /// bounded by the own wave: a horizontal axis's.
   bool welchCompanionDesign(const std::array<double, kChannels>& mean, double noise_density_squared,
                             Design* next) const;
   using SpectralMatrix = std::array<std::array<std::vector<std::complex<double>>, kChannels>, kChannels>;
