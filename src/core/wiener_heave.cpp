@@ -220,15 +220,24 @@ std::vector<double> WienerHeave::welch(int segment, double mean, std::vector<dou
   }
   for (double& d : density)
     d /= segments * window_power * fs;
+  *response = windowResponse(segment);
+  return density;
+}
+
+std::vector<double> WienerHeave::windowResponse(int segment) const
+{
   // The window spreads every line over neighbouring bins (over +-2 bins of a segment in its main
   // lobe). Its response, relative to its peak:
+  RealFft& fft = *transform_.fft;
+  double window_power = 0.0;
+  const std::vector<double> window = hannWindow(segment, &window_power);
   for (int i = 0; i < kDftSize; ++i)
     fft.in[i] = i < segment ? window[i] : 0.0;
   fft.execute();
-  response->resize(bins);
-  for (int k = 0; k < bins; ++k)
-    (*response)[k] = fft.power(k) / fft.power(0);
-  return density;
+  std::vector<double> response(kDftSize / 2 + 1);
+  for (std::size_t k = 0; k < response.size(); ++k)
+    response[k] = fft.power(static_cast<int>(k)) / fft.power(0);
+  return response;
 }
 
 std::vector<double> WienerHeave::burg(int order, double mean) const
@@ -629,32 +638,24 @@ bool WienerHeave::companionDesign(const Wave& sea, const Statistics& own, const 
 {
   const int bins = kDftSize / 2 + 1;
   int segments = 0;
-  const SpectralMatrix welch_matrix = welchMatrix(mean, &segments);
-  // The matrix designed from: the own estimate on the diagonal (Welch's for the companions), each
-  // cross-spectrum shrunk by how far its coherence stands above chance, 2 / K for K segments, the
-  // own input's scaled to the own estimate (its coherence kept).
+  SpectralMatrix matrix = welchMatrix(mean, &segments);
+  // The matrix designed from: the own estimate on the diagonal (its autocorrelation, passed on;
+  // Welch's for the companions), each cross-spectrum shrunk by how far its coherence stands above
+  // chance, 2 / K for K segments, the own input's scaled to the own estimate (its coherence kept).
   const double chance = 2.0 / segments;
-  SpectralMatrix matrix;
-  for (int a = 0; a < kChannels; ++a)
-    for (int b = 0; b < kChannels; ++b)
-      matrix[a][b].assign(bins, 0.0);
   for (int k = 0; k < bins; ++k)
   {
     std::array<double, kChannels> auto_density{};
     for (int c = 0; c < kChannels; ++c)
-      auto_density[c] = welch_matrix[c][c][k].real();
+      auto_density[c] = matrix[c][c][k].real();
     const double own_scale = auto_density[0] > 0.0 ? std::sqrt(sea.density[k] / auto_density[0]) : 0.0;
-    matrix[0][0][k] = sea.density[k];
-    for (int c = 1; c < kChannels; ++c)
-      matrix[c][c][k] = auto_density[c];
     for (int a = 0; a < kChannels; ++a)
       for (int b = a + 1; b < kChannels; ++b)
       {
-        const std::complex<double> cross = welch_matrix[a][b][k];
         const double product = auto_density[a] * auto_density[b];
-        const double coherence = product > 0.0 ? std::norm(cross) / product : 0.0;
+        const double coherence = product > 0.0 ? std::norm(matrix[a][b][k]) / product : 0.0;
         const double weight = std::clamp((coherence - chance) / (1.0 - chance), 0.0, 1.0);
-        matrix[a][b][k] = weight * (a == 0 ? own_scale : 1.0) * cross;
+        matrix[a][b][k] *= weight * (a == 0 ? own_scale : 1.0);
         matrix[b][a][k] = std::conj(matrix[a][b][k]);
       }
   }
@@ -667,15 +668,18 @@ bool WienerHeave::companionDesign(const Wave& sea, const Statistics& own, const 
 bool WienerHeave::welchCompanionDesign(const std::array<double, kChannels>& mean, double noise_density_squared,
                                        Design* next) const
 {
-  // The own input's wave in Welch's density of the matrix's segments (the noise floor and what the
-  // band owes the lines below it taken off): one estimate throughout, no mix of resolutions.
-  std::vector<double> response;
-  const Wave sea = wave(welch(kSegment, mean[0], &response), response, noise_density_squared, Estimate::kWelch);
+  int segments = 0;
+  const SpectralMatrix matrix = welchMatrix(mean, &segments);
+  // The own input's wave in the matrix's own density (the noise floor and what the band owes the
+  // lines below it taken off): one estimate throughout, no mix of resolutions.
+  std::vector<double> density(matrix[0][0].size());
+  for (std::size_t k = 0; k < density.size(); ++k)
+    density[k] = matrix[0][0][k].real();
+  const std::vector<double> response = windowResponse(kSegment);
+  const Wave sea = wave(std::move(density), response, noise_density_squared, Estimate::kWelch);
   const Statistics own = statistics(sea);
   if (own.autocorrelation.empty())
     return false;
-  int segments = 0;
-  const SpectralMatrix matrix = welchMatrix(mean, &segments);
   const double fs = 1.0 / (decimation_ * dt_);
   const int taps =
       std::min(static_cast<int>(own.autocorrelation.size()), static_cast<int>(std::lround(kCrossSpan * fs)));

@@ -247,6 +247,9 @@ private:
   /// frequencies: Welch's with Hann segments of `segment` values, half overlap, and in
   /// *response the window's power response relative to its peak at the same frequencies.
   std::vector<double> welch(int segment, double mean, std::vector<double>* response) const;
+  /// A Hann window of `segment` values' power response relative to its peak at the same
+  /// frequencies.
+  std::vector<double> windowResponse(int segment) const;
   /// The same by Burg's method, an autoregressive model of `order` fitted to the whole record
   /// (no window).
   std::vector<double> burg(int order, double mean) const;
