@@ -9,6 +9,7 @@ add_library(${PROJECT_NAME}_core
   src/core/heave_filter.cpp
   src/core/time_base.cpp
   src/core/real_fft.cpp
+  src/core/background.cpp
   src/core/wiener_heave.cpp
   src/core/toeplitz.cpp
   src/core/noise_floor.cpp

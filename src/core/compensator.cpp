@@ -169,8 +169,9 @@ public:
     std::string why;
     if (!config_.validate(&why))
       throw std::invalid_argument("invalid compensator configuration: " + why);
-    // Starts the planning thread here, not in the call of the sample that first gives the rate.
-    planInBackground([] {});
+    // Starts the planning thread here, not in the call of the sample that first gives the rate,
+    // and plans the transforms of fixed size there: the noise floor's and the spectral designs'.
+    planInBackground([] { warmFftPlans({ NoiseFloor::kBlock, WienerHeave::kDftSize }); });
     // The wave stages as configured (per axis: vertical or not, the wave band) from the first
     // sample on, calibration window or not (a bias from a file skips it).
     resetMotion();
@@ -313,6 +314,7 @@ public:
     for (int i = 0; i < 3; ++i)
     {
       axes_[i] = AxisEstimator();
+      axes_[i].broadband.setBackgroundDesigns(background_designs_);
       axes_[i].drift.setBias(constant_bias_[i]);  // zero unless it came from a file
     }
     resetMotion();
@@ -362,6 +364,13 @@ public:
     counters_.sample_rate = 0.0;
     lever_.reset();
     resetEstimator();
+  }
+
+  void setBackgroundDesigns(bool background)
+  {
+    background_designs_ = background;
+    for (AxisEstimator& axis : axes_)
+      axis.broadband.setBackgroundDesigns(background);
   }
 
   void recalibrate()
@@ -515,6 +524,7 @@ private:
       axis.slow_start = now_;
       axis.residual_variance = 0.0;
       axis.broadband = BroadbandWave(&axis == &axes_[2], config_.heave_corner_frequency, config_.min_frequency, true);
+      axis.broadband.setBackgroundDesigns(background_designs_);
       axis.consistency = WaveConsistency(config_.min_frequency);
       axis.paper.reset();
       axis.d_v = axis.d_p = 0.0;
@@ -905,6 +915,7 @@ private:
   Leveller leveller_;
   LeverArm lever_;  ///< the IMU's offset taken off the wave outputs
 
+  bool background_designs_ = true;  ///< setBackgroundDesigns
   bool calibrated_ = false;
   bool bias_from_file_ = false;
   Vector3 constant_bias_ = Vector3::Zero();
@@ -931,6 +942,10 @@ SampleStatus Compensator::addSample(const ImuSample& sample, CompensatorOutput* 
 void Compensator::reset()
 {
   impl_->reset();
+}
+void Compensator::setBackgroundDesigns(bool background)
+{
+  impl_->setBackgroundDesigns(background);
 }
 void Compensator::recalibrate()
 {

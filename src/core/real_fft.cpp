@@ -1,14 +1,7 @@
 #include "real_fft.h"
 
 #include <cmath>
-
-#include <sys/resource.h>
-#include <sys/syscall.h>
-#include <unistd.h>
-
-#include <condition_variable>
-#include <deque>
-#include <thread>
+#include <unordered_map>
 
 #include "periodic_bias_compensation/common/fftw_planner.h"
 
@@ -43,84 +36,62 @@ int fastFftSize(int n)
 
 namespace
 {
-/// The thread behind planInBackground: a queue of tasks, run one at a time.
-class BackgroundPlanner
+/// The plans of one size, made once per process and shared by every RealFft of that size: FFTW
+/// executes a plan on other arrays of the same alignment from any thread (new-array execute).
+struct Plans
 {
-public:
-  BackgroundPlanner() : thread_([this] { run(); })
-  {
-  }
-  ~BackgroundPlanner()
-  {
-    {
-      std::lock_guard<std::mutex> lock(mutex_);
-      stop_ = true;
-    }
-    wake_.notify_one();
-    thread_.join();
-  }
-  void post(std::function<void()> task)
-  {
-    {
-      std::lock_guard<std::mutex> lock(mutex_);
-      tasks_.push_back(std::move(task));
-    }
-    wake_.notify_one();
-  }
-
-private:
-  void run()
-  {
-    setpriority(PRIO_PROCESS, static_cast<id_t>(syscall(SYS_gettid)), 19);
-    for (;;)
-    {
-      std::function<void()> task;
-      {
-        std::unique_lock<std::mutex> lock(mutex_);
-        wake_.wait(lock, [this] { return stop_ || !tasks_.empty(); });
-        if (tasks_.empty())
-          return;
-        task = std::move(tasks_.front());
-        tasks_.pop_front();
-      }
-      task();
-    }
-  }
-
-  std::mutex mutex_;
-  std::condition_variable wake_;
-  std::deque<std::function<void()>> tasks_;
-  bool stop_ = false;
-  std::thread thread_;  ///< last: started once the rest is built
+  fftw_plan forward;
+  fftw_plan inverse;
 };
-}  // namespace
 
-void planInBackground(std::function<void()> task)
+Plans plansOfSize(int n)
 {
-  static BackgroundPlanner planner;
-  planner.post(std::move(task));
+  // Never destroyed: the background threads may still plan while the process exits.
+  static std::mutex& cache_mutex = *new std::mutex;
+  static std::unordered_map<int, Plans>& cache = *new std::unordered_map<int, Plans>;
+  {
+    std::lock_guard<std::mutex> lock(cache_mutex);
+    const auto found = cache.find(n);
+    if (found != cache.end())
+      return found->second;
+  }
+  // Planned under the planner's lock, with arrays of its own (fftw_alloc's alignment, as every
+  // RealFft's), which the plans do not need afterwards.
+  std::lock_guard<std::mutex> planner(fftwPlannerMutex());
+  {
+    std::lock_guard<std::mutex> lock(cache_mutex);
+    const auto found = cache.find(n);
+    if (found != cache.end())
+      return found->second;  // planned by another thread meanwhile
+  }
+  double* in = fftw_alloc_real(n);
+  fftw_complex* out = fftw_alloc_complex(n / 2 + 1);
+  const Plans plans{ fftw_plan_dft_r2c_1d(n, in, out, FFTW_ESTIMATE), fftw_plan_dft_c2r_1d(n, out, in, FFTW_ESTIMATE) };
+  fftw_free(in);
+  fftw_free(out);
+  std::lock_guard<std::mutex> lock(cache_mutex);
+  cache.emplace(n, plans);
+  return plans;
 }
+}  // namespace
 
 void warmFftPlans(const std::vector<int>& sizes)
 {
   for (int n : sizes)
-    RealFft planned(n);
+    plansOfSize(n);
 }
 
 RealFft::RealFft(int n) : n_(n)
 {
+  const Plans plans = plansOfSize(n);
+  plan_ = plans.forward;
+  inverse_plan_ = plans.inverse;
   in = fftw_alloc_real(n);
   out = fftw_alloc_complex(n / 2 + 1);
-  std::lock_guard<std::mutex> lock(fftwPlannerMutex());
-  plan_ = fftw_plan_dft_r2c_1d(n, in, out, FFTW_ESTIMATE);
-  inverse_plan_ = fftw_plan_dft_c2r_1d(n, out, in, FFTW_ESTIMATE);
 }
 
 RealFft::~RealFft()
 {
-  std::lock_guard<std::mutex> lock(fftwPlannerMutex());
-  fftw_destroy_plan(plan_);
-  fftw_destroy_plan(inverse_plan_);
   fftw_free(in);
   fftw_free(out);
 }

@@ -3,9 +3,10 @@
 
 #include <fftw3.h>
 
-#include <functional>
 #include <mutex>
 #include <vector>
+
+#include "background.h"
 
 namespace periodic_bias_compensation
 {
@@ -17,13 +18,8 @@ int fastFftSize(int n);
 /// the sum of its squares.
 std::vector<double> hannWindow(int n, double* power = nullptr);
 
-/// Runs `task` on the core's background planning thread (one per process, at nice 19, so that it
-/// leaves the core to the threads that feed samples), in the order given. FFTW plans a transform
-/// size it has not seen in milliseconds: that is done there, not in a sample's call.
-void planInBackground(std::function<void()> task);
-
-/// Plans and drops transforms of these sizes. FFTW keeps what it planned: a transform of one of
-/// them is then planned in microseconds instead of milliseconds.
+/// Plans transforms of these sizes: a RealFft of one of them then takes the plans made (a size
+/// not seen before is planned in milliseconds, under the planner's lock).
 void warmFftPlans(const std::vector<int>& sizes);
 
 /// The input `in` (n values) transformed into `out` (n / 2 + 1 bins) by execute(); `out` (the
@@ -44,11 +40,11 @@ public:
   /// Executing an existing plan is thread-safe in FFTW; planning is not and is serialised here.
   void execute()
   {
-    fftw_execute(plan_);
+    fftw_execute_dft_r2c(plan_, in, out);
   }
   void inverse()
   {
-    fftw_execute(inverse_plan_);
+    fftw_execute_dft_c2r(inverse_plan_, out, in);
   }
   double power(int k) const
   {
@@ -60,7 +56,7 @@ public:
 
 private:
   int n_;
-  fftw_plan plan_;
+  fftw_plan plan_;  ///< the process's plans of this size, shared (never destroyed)
   fftw_plan inverse_plan_;
 };
 

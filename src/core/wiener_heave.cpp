@@ -39,10 +39,35 @@ void WienerHeave::reset()
   fade_ = 1.0;
   peak_frequency_ = 0.0;
   stale_ = false;
+  urgent_ = false;
+  // A design still running keeps the transform it shares; the next one makes its own.
+  if (pending_.valid())
+    transform_.fft.reset();
+  pending_ = {};
+}
+
+WienerHeave::WienerHeave(const WienerHeave& source, ForDesign)
+  : min_frequency_(source.min_frequency_),
+    vertical_(source.vertical_),
+    channels_used_(source.channels_used_),
+    dt_(source.dt_),
+    sized_dt_(source.sized_dt_),
+    decimation_(source.decimation_),
+    samples_(source.samples_),
+    ring_length_(source.ring_length_),
+    since_manoeuvre_(source.since_manoeuvre_),
+    since_gap_(source.since_gap_)
+{
+  for (int c = 0; c < channels_used_; ++c)
+    channels_[c].decimated = source.channels_[c].decimated;
+  transform_.fft = source.transform_.fft;
 }
 
 void WienerHeave::restartRecord()
 {
+  // The design made before the turn is taken up now, then marked stale with the others.
+  if (pending_.valid())
+    finishDesign();
   for (Channel& channel : channels_)
     channel.decimated.clear();
   since_design_ = 0.0;
@@ -74,6 +99,7 @@ WienerHeaveOutput WienerHeave::step(double a, double period, double noise_densit
   {
     sized_dt_ = period;
     decimation_ = std::max(1, static_cast<int>(std::lround(kDesignPeriod / dt_)));
+    delay_samples_ = std::lround(kDesignDelay / dt_);
     ring_length_ = static_cast<int>(std::ceil(kMaxSpan / (decimation_ * dt_)));
     for (int c = 0; c < channels_used_; ++c)
     {
@@ -90,10 +116,16 @@ WienerHeaveOutput WienerHeave::step(double a, double period, double noise_densit
     else
     {
       // A gap: the companions' records hold zeros from here, which a design reading them would
-      // take for the sea; the next sample designs anew (from the own input alone).
+      // take for the sea; this sample designs anew (from the own input alone), and takes the
+      // design up at once (a pending one first, which may read them).
       since_gap_ = 0.0;
+      if (pending_.valid())
+        finishDesign();
       if (readsCompanions())
+      {
         since_design_ = std::numeric_limits<double>::infinity();
+        urgent_ = true;
+      }
     }
   }
   // Two moving averages (running sums over circular buffers of decimation_ values).
@@ -132,12 +164,15 @@ WienerHeaveOutput WienerHeave::step(double a, double period, double noise_densit
   const double recorded = record().size() * decimation_ * dt_;
   const double interval = recorded < kEarlyRecord ? kEarlyRedesignInterval : kRedesignInterval;
   const double first = current_ ? kRestartDesign : kFirstDesign;
-  if ((current_ && !stale_ ? since_design_ >= interval : recorded >= first) &&
+  if (!pending_.valid() && (current_ && !stale_ ? since_design_ >= interval : recorded >= first) &&
       static_cast<int>(record().size()) >= kMinSegment)
   {
-    design(noise_density_squared);
+    startDesign(noise_density_squared, urgent_ ? 0 : delay_samples_);
     since_design_ = 0.0;
+    urgent_ = false;
   }
+  if (pending_.valid() && samples_ >= pending_due_)
+    finishDesign();
   if (!current_)
     return out;
   apply(*current_, &out.position, &out.velocity);
@@ -411,10 +446,36 @@ WienerHeave::Statistics WienerHeave::statistics(const Wave& w) const
   return out;
 }
 
-void WienerHeave::design(double noise_density_squared)
+void WienerHeave::startDesign(double noise_density_squared, long delay)
 {
   if (!transform_.fft)
     transform_.fft = std::make_shared<RealFft>(kDftSize);
+  std::shared_ptr<const WienerHeave> copy(new WienerHeave(*this, ForDesign{}));
+  auto task = std::make_shared<std::packaged_task<Outcome()>>(
+      [copy, noise_density_squared] { return copy->design(noise_density_squared); });
+  pending_ = task->get_future().share();
+  pending_due_ = samples_ + delay;
+  if (background_ && delay > 0)
+    designInBackground([task] { (*task)(); });
+  else
+    (*task)();
+}
+
+void WienerHeave::finishDesign()
+{
+  const Outcome outcome = pending_.get();
+  pending_ = {};
+  if (!outcome.design)
+    return;
+  peak_frequency_ = outcome.peak_frequency;
+  previous_ = std::move(current_);
+  current_ = outcome.design;
+  stale_ = false;
+  fade_ = previous_ ? 0.0 : 1.0;
+}
+
+WienerHeave::Outcome WienerHeave::design(double noise_density_squared) const
+{
   const int n = static_cast<int>(record().size());
   std::array<double, kChannels> means{};
   for (int c = 0; c < channels_used_; ++c)
@@ -451,23 +512,17 @@ void WienerHeave::design(double noise_density_squared)
   const Statistics fit = statistics(sea);
   if (fit.autocorrelation.empty())
   {
-    peak_frequency_ = 0.0;
     // No wave in the spectrum: no heave.
     auto none = std::make_shared<Design>();
     none->position[0].assign(1, 0.0);
     none->velocity[0].assign(1, 0.0);
     none->mean = means;
-    previous_ = std::move(current_);
-    current_ = std::move(none);
-    stale_ = false;
-    fade_ = previous_ ? 0.0 : 1.0;
-    return;
+    return { std::move(none), 0.0 };
   }
   auto next = std::make_shared<Design>();
   if (!solveToeplitz(fit.autocorrelation, fit.r_position, &next->position[0]) ||
       !solveToeplitz(fit.autocorrelation, fit.r_velocity, &next->velocity[0]))
-    return;  // keep the last design, and its peak
-  peak_frequency_ = sea.peak_frequency;
+    return {};  // keep the last design, and its peak
   // The expected error E[(x - h a)^2] = var(x) - h r of taps solved from these statistics
   // (R h = r).
   double explained = 0.0, explained_velocity = 0.0;
@@ -494,10 +549,7 @@ void WienerHeave::design(double noise_density_squared)
   else if (companions && segments >= kCrossSegments && companionDesign(sea, fit, means, &joint) &&
            joint.error_variance < next->error_variance)
     *next = std::move(joint);
-  previous_ = std::move(current_);
-  current_ = std::move(next);
-  stale_ = false;
-  fade_ = previous_ ? 0.0 : 1.0;
+  return { std::move(next), sea.peak_frequency };
 }
 
 WienerHeave::SpectralMatrix WienerHeave::welchMatrix(const std::array<double, kChannels>& mean, int* segments) const

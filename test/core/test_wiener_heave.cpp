@@ -438,6 +438,52 @@ TEST(WienerHeave, RestartRecordDesignsFromTheSeaMetSince)
   EXPECT_NEAR(heave.peakFrequency(), 1.0 / 4.0, 0.4 / 4.0);
 }
 
+// Designs made on the core's design thread and taken up kDesignDelay later change nothing against
+// designs made in the sample's own call: the same outputs, sample for sample, through the first
+// designs, the later ones, a turn (restartRecord) and a gap in the companions. The first design is
+// taken up kDesignDelay after the data it was made from.
+TEST(WienerHeave, BackgroundDesignsChangeNoOutput)
+{
+  const Sea sea = Sea(1.0 / 8.0, 2.0, 31) + Sea::swell(1.0 / 14.0, 1.0, 32, 0.05);
+  const double rate = 20.0, dt = 1.0 / rate;
+  WienerHeave background(0.03, false, true), calling(0.03, false, true);
+  calling.setBackgroundDesigns(false);
+  std::mt19937_64 rng(33);
+  std::normal_distribution<double> normal(0.0, 0.01);
+  long differing = 0, valid = 0, first_valid = -1, reads = 0;
+  for (long i = 0; i < static_cast<long>(700 * rate); ++i)
+  {
+    double x, v, a;
+    sea.at(i * dt, &x, &v, &a);
+    WienerHeave::Companions companions{ a + normal(rng), normal(rng) };
+    if (i == static_cast<long>(500 * rate))
+      companions[0] = NAN;
+    if (i == static_cast<long>(300 * rate))
+    {
+      background.restartRecord();
+      calling.restartRecord();
+    }
+    const double measured = 0.5 * a + normal(rng);
+    const WienerHeaveOutput b = background.update(measured, dt, 1e-4, companions);
+    const WienerHeaveOutput c = calling.update(measured, dt, 1e-4, companions);
+    if (b.valid != c.valid || b.position != c.position || b.velocity != c.velocity ||
+        b.error_variance != c.error_variance || background.peakFrequency() != calling.peakFrequency())
+      ++differing;
+    valid += b.valid;
+    reads += background.readsCompanions();
+    if (b.valid && first_valid < 0)
+      first_valid = i;
+  }
+  EXPECT_EQ(differing, 0);
+  EXPECT_GT(valid, static_cast<long>(600 * rate));
+  EXPECT_GT(reads, 0) << "a design read the companions";
+  // The low-pass's two averages fill (2 D samples), the record reaches kFirstDesign (its first
+  // value is the 2 D-th sample's), then kDesignDelay.
+  const long decimation = background.decimation();
+  const long made = 2 * decimation + std::lround(WienerHeave::kFirstDesign * rate) - decimation;
+  EXPECT_EQ(first_valid + 1, made + std::lround(WienerHeave::kDesignDelay * rate));
+}
+
 // A sample period no IMU has (a glitch, a fuzzed stream) sizes nothing: no output, no throw.
 TEST(WienerHeave, AbsurdPeriodsAreIgnored)
 {

@@ -132,6 +132,11 @@ public:
   /// Forgets everything (filters, variances, share).
   void reset();
   void configure(double corner_frequency, double min_frequency);
+  /// WienerHeave::setBackgroundDesigns of the spectral estimate.
+  void setBackgroundDesigns(bool background)
+  {
+    spectral_.setBackgroundDesigns(background);
+  }
 
   BroadbandWaveOutput update(const BroadbandWaveInput& in);
   /// The last update's share of the wave output [-].

@@ -281,6 +281,11 @@ public:
 
   const CompensatorCounters& counters() const;
 
+  /// The spectral wave filter's designs run on the core's design thread (true, the default) or in
+  /// the call of the sample they fall due on (false): the outputs are the same; the former keeps
+  /// their milliseconds out of addSample (docs/architecture.md).
+  void setBackgroundDesigns(bool background);
+
 private:
   std::unique_ptr<CompensatorImpl> impl_;
 };

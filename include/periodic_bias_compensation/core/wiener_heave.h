@@ -50,11 +50,19 @@
 // design (kFirstDesign of data, kRestartDesign after restartRecord()) it has no output: the owner
 // uses another estimate.
 //
+// A design is made from the record as it stands on the sample it falls due and is applied
+// kDesignDelay of data later: on the core's design thread, so that the sample's call does not pay
+// the milliseconds a design costs (or on the calling thread, setBackgroundDesigns(false)). The
+// outputs are the same sample for sample either way: the sample that takes a design up is set by
+// the data, and waits for the design if the thread has not finished it. A gap in the companions
+// is the exception: the design that follows it is made and taken up in the gap's call.
+//
 // Threading: not thread-safe; the owner serialises calls.
 #pragma once
 
 #include <array>
 #include <complex>
+#include <future>
 #include <limits>
 #include <memory>
 #include <vector>
@@ -94,6 +102,7 @@ public:
   static constexpr double kMaxSpan = 120.0;              ///< [s]
   static constexpr double kNoiseMargin = 3.0;            ///< multiples of the noise floor taken as noise
   static constexpr double kDesignFade = 2.0;             ///< [s]
+  static constexpr double kDesignDelay = 0.1;            ///< from a design's data to its use [s]
   static constexpr double kMinPeriod = 1e-4;             ///< shortest sample period taken (10 kHz) [s]
   static constexpr double kMaxPeriod = 10.0;             ///< longest [s]
   /// Relative change of the sample period that starts the record over (the buffers and the
@@ -144,6 +153,12 @@ public:
     since_manoeuvre_ = 0.0;
   }
   void setMinFrequency(double min_frequency);
+  /// Designs run on the core's design thread (true, the default) or in the call of the sample
+  /// they fall due on (false); the outputs are the same.
+  void setBackgroundDesigns(bool background)
+  {
+    background_ = background;
+  }
 
   /// Takes the vertical acceleration a [m/s^2] (gravity removed), the sample period [s] as the
   /// owner's time base has it (samples are taken one period apart: stamp jitter and a dropped
@@ -286,7 +301,25 @@ private:
   bool solveJoint(const SpectralMatrix& matrix, const std::vector<double>& own_autocorrelation, const Wave& sea,
                   const Statistics& own, int taps, double loading, bool bounded,
                   const std::array<double, kChannels>& mean, Design* next) const;
-  void design(double noise_density_squared);
+  /// What a design changes: the new design and its peak frequency (design null: the last one
+  /// stays, and its peak).
+  struct Outcome
+  {
+    std::shared_ptr<const Design> design;
+    double peak_frequency = 0.0;
+  };
+  /// A copy of what a design reads (the records, the rate, the flags and the transform), not of
+  /// the full-rate histories.
+  struct ForDesign
+  {
+  };
+  WienerHeave(const WienerHeave& source, ForDesign);
+  Outcome design(double noise_density_squared) const;
+  /// Starts a design from the record as it stands, due `delay` samples later (0: made and taken up
+  /// in this call).
+  void startDesign(double noise_density_squared, long delay);
+  /// Waits for the pending design and takes it up.
+  void finishDesign();
   WienerHeaveOutput step(double a, double period, double noise_density_squared, const Companions* companions);
   void apply(const Design& d, double* x, double* v) const;
 
@@ -310,8 +343,16 @@ private:
   std::shared_ptr<const Design> current_, previous_;
   double fade_ = 1.0;  ///< weight of current_ against previous_
   double peak_frequency_ = 0.0;
-  /// The transform of the design, made at the first design.
+  /// The transform of the design, made at the first design; a pending design's copy shares it,
+  /// and reset() leaves it to that copy.
   UnsharedTransform transform_;
+  bool background_ = true;
+  /// The design started and not yet taken up (invalid: none), and the count of samples_ that
+  /// takes it up.
+  std::shared_future<Outcome> pending_;
+  long pending_due_ = 0;
+  long delay_samples_ = 0;  ///< kDesignDelay in samples at the record's rate
+  bool urgent_ = false;     ///< the next design is taken up in the call that starts it
 };
 
 }  // namespace periodic_bias_compensation

@@ -1,0 +1,83 @@
+#include "background.h"
+
+#include <sys/resource.h>
+#include <sys/syscall.h>
+#include <unistd.h>
+
+#include <condition_variable>
+#include <deque>
+#include <mutex>
+#include <thread>
+
+namespace periodic_bias_compensation
+{
+namespace
+{
+/// A thread with a queue of tasks, run one at a time in the order posted; at `nice` (0: the
+/// priority of the thread that started it).
+class BackgroundThread
+{
+public:
+  explicit BackgroundThread(int nice) : nice_(nice), thread_([this] { run(); })
+  {
+  }
+  ~BackgroundThread()
+  {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      stop_ = true;
+    }
+    wake_.notify_one();
+    thread_.join();
+  }
+  void post(std::function<void()> task)
+  {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      tasks_.push_back(std::move(task));
+    }
+    wake_.notify_one();
+  }
+
+private:
+  void run()
+  {
+    if (nice_ != 0)
+      setpriority(PRIO_PROCESS, static_cast<id_t>(syscall(SYS_gettid)), nice_);
+    for (;;)
+    {
+      std::function<void()> task;
+      {
+        std::unique_lock<std::mutex> lock(mutex_);
+        wake_.wait(lock, [this] { return stop_ || !tasks_.empty(); });
+        if (tasks_.empty())
+          return;
+        task = std::move(tasks_.front());
+        tasks_.pop_front();
+      }
+      task();
+    }
+  }
+
+  const int nice_;
+  std::mutex mutex_;
+  std::condition_variable wake_;
+  std::deque<std::function<void()>> tasks_;
+  bool stop_ = false;
+  std::thread thread_;  ///< last: started once the rest is built
+};
+}  // namespace
+
+void planInBackground(std::function<void()> task)
+{
+  static BackgroundThread planner(19);
+  planner.post(std::move(task));
+}
+
+void designInBackground(std::function<void()> task)
+{
+  static BackgroundThread designer(0);
+  designer.post(std::move(task));
+}
+
+}  // namespace periodic_bias_compensation
