@@ -21,6 +21,9 @@ if(benchmark_FOUND)
   target_link_libraries(core_benchmark ${PROJECT_NAME}_core ${PROJECT_NAME}_sim benchmark::benchmark)
   target_compile_definitions(core_benchmark PRIVATE PBC_SCENARIO_DIR="${CMAKE_CURRENT_SOURCE_DIR}/config/scenarios")
 endif()
+# The time of each sample's call, paced (scripts/bench.py, not a test).
+add_executable(core_latency EXCLUDE_FROM_ALL test/bench/core_latency.cpp)
+target_link_libraries(core_latency ${PROJECT_NAME}_core ${PROJECT_NAME}_sim)
 
 # Speed of the ROS side (scripts/bench.py, not tests): the nodelet's input rate and latency, in the
 # same manager as a publisher or as a separate process, and the floor of compensate_bag's speed.

@@ -17,7 +17,7 @@ run: builds the benchmark programs (scripts/setup), measures (progress on stderr
 render: the JSON to markdown only (plots beside the output, in bench/).
 --out: the markdown (default docs/benchmarks.md; its plots go to bench/ beside it). The sections
   from "## Reliability runs" on are kept by hand and carried over from docs/benchmarks.md.
-Sections: core-speed, nodelet, bag, memory, accuracy, external-accuracy, real-recordings,
+Sections: core-speed, core-latency, nodelet, bag, memory, accuracy, external-accuracy, real-recordings,
   real-world, simulator-speed.
 """
 import argparse
@@ -46,7 +46,7 @@ from bench_tables import parse_blocks  # noqa: E402
 JSON = os.path.join(REPO, 'docs', 'bench', 'results.json')
 OUT = os.path.join(REPO, 'docs', 'benchmarks.md')
 TEMPLATE = os.path.join(REPO, 'docs', 'bench', 'benchmarks.md.in')
-TARGETS = ('core_benchmark', 'evaluate_compensator', 'nodelet_benchmark', 'bag_read_floor', 'simulate_imu',
+TARGETS = ('core_benchmark', 'core_latency', 'evaluate_compensator', 'nodelet_benchmark', 'bag_read_floor', 'simulate_imu',
            'compensate_bag', 'test_core')
 PY = '/usr/bin/python3'  # Debian's ROS modules live there, not in another python on PATH
 
@@ -152,6 +152,18 @@ class Bench:
                 rows.append({'name': cells[0].replace('_median', ''), 'real_time': float(cells[2]),
                              'items': float(cells[6]) if len(cells) > 6 and cells[6] else 0.0})
         return {'repetitions': 5, 'rows': rows}
+
+    def core_latency(self):
+        data_s, speed, repetitions = (60, 4, 1) if self.quick else (300, 4, 2)
+        log('core latency: %d s of data at %g times its pace, designs in the background and in the call'
+            % (data_s, speed))
+        runs = []
+        for _ in range(repetitions):
+            for designs in ('background', 'calling'):
+                r = self.output([self.exe('core_latency'), '--scenario', self.ros_scenario, '--duration', str(data_s),
+                                 '--speed', str(speed), '--designs', designs], check=True)
+                runs.append(fields([line for line in r.stdout.split('\n') if line.startswith('designs=')][-1]))
+        return {'seed': self.ros_seed, 'duration': data_s, 'speed': speed, 'runs': runs}
 
     def nodelet_run(self, label, transport, *extra, env=None, group=None):
         """One nodelet_benchmark run: {'label', 'fields'} (and 'group' when given); tcp starts
@@ -396,7 +408,7 @@ def run(args):
                 'quick': args.quick, 'machine': model, 'cores': cores, 'load_start': loadavg(),
                 'sections': [s for s in bench_render.SECTIONS if s in only]}
     bench = Bench(args)
-    methods = {'core-speed': bench.core_speed, 'nodelet': bench.nodelet, 'bag': bench.bag_section,
+    methods = {'core-speed': bench.core_speed, 'core-latency': bench.core_latency, 'nodelet': bench.nodelet, 'bag': bench.bag_section,
                'memory': bench.memory, 'accuracy': bench.accuracy, 'external-accuracy': bench.external_accuracy,
                'real-recordings': bench.real_recordings, 'real-world': bench.real_world,
                'simulator-speed': bench.simulator_speed}

@@ -12,7 +12,7 @@ import real_world_report
 from bench_tables import blocks_markdown, table_lines
 
 # The sections of results.json, in the order scripts/bench.py measures them (--only takes these).
-SECTIONS = ('core-speed', 'nodelet', 'bag', 'memory', 'accuracy', 'external-accuracy', 'real-recordings',
+SECTIONS = ('core-speed', 'core-latency', 'nodelet', 'bag', 'memory', 'accuracy', 'external-accuracy', 'real-recordings',
             'real-world', 'simulator-speed')
 KEPT_HEADINGS = ('## Reliability runs', '## Measurements behind the design')
 
@@ -112,6 +112,9 @@ def values(name, results, plots_dir):
                  table=real_world_report.markdown(tests))
     elif name == 'core-speed':
         v.update(repetitions=s['repetitions'], table=core_table(s['rows']))
+    elif name == 'core-latency':
+        v.update(seed=s['seed'], duration=s['duration'], speed='%g' % s['speed'],
+                 table=bench_report.core_latency_markdown(s['runs']).strip('\n'))
     elif name == 'simulator-speed':
         v.update(hours='%g' % (s['duration'] / 3600), samples='%g' % (s['duration'] * 100 / 1e6),
                  duration=s['duration'], wall_s='%.2f' % s['wall_s'], max_rss_kb=s['max_rss_kb'])

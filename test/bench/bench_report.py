@@ -16,6 +16,32 @@ def fields(line):
     return dict(kv.split('=', 1) for kv in line.split())
 
 
+def core_latency_markdown(runs):
+    """The core_latency runs as a table, then whether every run's outputs were the same and the
+    calls over 1 ms per kind of design."""
+    out = []
+    print = lambda *a: out.append(a[0] if a else '')
+    print('| designs | run | mean [us] | p50 [us] | p99 [us] | p99.9 [us] | max [us] | calls > 200 us | calls > 1 ms '
+          '| slowest calls (data time [s]: us) |')
+    print('|---|---|---|---|---|---|---|---|---|---|')
+    done = {}
+    for f in runs:
+        done[f['designs']] = done.get(f['designs'], 0) + 1
+        slowest = ', '.join('%s: %s' % tuple(c.split(':')) for c in f['slowest'].split(','))
+        print('| %s | %d | %.1f | %.1f | %.0f | %.0f | %.0f | %s | %s | %s |' % (
+            f['designs'], done[f['designs']], float(f['mean_us']), float(f['p50_us']), float(f['p99_us']),
+            float(f['p999_us']), float(f['max_us']), f['over_200us'], f['over_1ms'], slowest))
+    print()
+    same = len({f['checksum'] for f in runs}) == 1
+    print('Outputs of every run the same (sum of the positions over the run): **%s**.' % ('yes' if same else 'no'))
+    kinds = sorted(done, key=lambda k: k != 'background')
+    print('Calls over 1 ms, %s: **%s**; calls over 200 us: **%s**.' % (
+        ' / '.join(kinds),
+        ' / '.join(str(sum(int(f['over_1ms']) for f in runs if f['designs'] == k)) for k in kinds),
+        ' / '.join(str(sum(int(f['over_200us']) for f in runs if f['designs'] == k)) for k in kinds)))
+    return '\n'.join(out) + '\n'
+
+
 def _nodelet_rows(runs):
     rows = [(r['label'], r['fields']) for r in runs if 'group' not in r]
     by = {(f['transport'], label): f for label, f in rows}

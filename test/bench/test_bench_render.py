@@ -49,7 +49,8 @@ class RenderTest(unittest.TestCase):
         self.assertNotIn('Not measured yet', self.md)
         for heading in ('## Accuracy on simulated scenarios', '## Accuracy against robot_localization',
                         '## Accuracy on real recordings', '### Where the baselines win or lose',
-                        '## Real-world streams', '## Speed of the core', '## Speed of the simulator',
+                        '## Real-world streams', '## Speed of the core', '## Latency of the core',
+                        '## Speed of the simulator',
                         '## Speed of the nodelet', '## compensate_bag against a read-only loop',
                         '## Memory over a long run'):
             self.assertIn('\n' + heading, self.md)
@@ -132,6 +133,18 @@ class RenderTest(unittest.TestCase):
         self.assertIn('| 17.1 (84.8) |', self.md)
         self.assertIn('random walk (2 seeds)', self.md)
         self.assertIn('300 components; 1 seed)', self.md)
+
+    def test_core_latency(self):
+        self.assertIn('`swell_and_wind_sea` (seed 7), 300 s of 100 Hz data given at 4 times its own pace', self.md)
+        self.assertIn('| background | 1 | 12.6 | 10.7 | 53 | 140 | 542 | 5 | 0 | 0.16: 542, 86.12: 392, 10.00: 309, '
+                      '45.99: 240, 35.40: 202 |', self.md)
+        self.assertIn('| calling | 1 | 14.9 | 12.3 | 59 | 443 | 1942 | 25 | 3 |', self.md)
+        self.assertIn('Outputs of every run the same (sum of the positions over the run): **yes**.', self.md)
+        self.assertIn('Calls over 1 ms, background / calling: **0 / 3**; calls over 200 us: **5 / 25**.', self.md)
+        # Runs whose outputs differ say so.
+        changed = copy.deepcopy(FIXTURE)
+        changed['sections']['core-latency']['runs'][1]['checksum'] = '-19.8492'
+        self.assertIn('(sum of the positions over the run): **no**.', render(changed))
 
     def test_prose_is_computed(self):
         prose = self.md.split('### Where the baselines win or lose')[1].split('\n## ')[0]
