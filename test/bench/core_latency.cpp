@@ -134,7 +134,7 @@ int main(int argc, char** argv)
     }
     std::printf(
         "designs=%s samples=%zu speed=%g mean_us=%.2f p50_us=%.2f p99_us=%.2f p999_us=%.1f max_us=%.1f "
-        "max_at_s=%.2f over_200us=%ld over_1ms=%ld slowest=%s checksum=%.9g\n",
+        "max_at_s=%.2f over_200us=%ld over_1ms=%ld slowest=%s checksum=%.17g\n",
         options.designs.c_str(), samples.size(), options.speed, total / samples.size(), quantile(sorted, 0.5),
         quantile(sorted, 0.99), quantile(sorted, 0.999), sorted.back(), samples[slowest].t - t0, over_200, over_1000,
         slowest_calls.c_str(), checksum);
