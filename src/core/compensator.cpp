@@ -314,7 +314,6 @@ public:
     for (int i = 0; i < 3; ++i)
     {
       axes_[i] = AxisEstimator();
-      axes_[i].broadband.setBackgroundDesigns(background_designs_);
       axes_[i].drift.setBias(constant_bias_[i]);  // zero unless it came from a file
     }
     resetMotion();

@@ -51,7 +51,6 @@ WienerHeave::WienerHeave(const WienerHeave& source, ForDesign)
     vertical_(source.vertical_),
     channels_used_(source.channels_used_),
     dt_(source.dt_),
-    sized_dt_(source.sized_dt_),
     decimation_(source.decimation_),
     samples_(source.samples_),
     ring_length_(source.ring_length_),

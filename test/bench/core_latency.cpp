@@ -56,11 +56,6 @@ std::optional<Options> parseOptions(int argc, char** argv)
     throw pbc::UsageError("--designs is background or calling");
   return o;
 }
-
-double quantile(const std::vector<double>& sorted, double q)
-{
-  return sorted[static_cast<std::size_t>(q * static_cast<double>(sorted.size() - 1))];
-}
 }  // namespace
 
 int main(int argc, char** argv)
@@ -107,9 +102,15 @@ int main(int argc, char** argv)
       call_us[k] = std::chrono::duration<double, std::micro>(Clock::now() - before).count();
       checksum += out.position_filtered.sum() + out.position_wave.sum();
     }
-    const std::size_t slowest = std::max_element(call_us.begin(), call_us.end()) - call_us.begin();
-    std::vector<double> sorted = call_us;
-    std::sort(sorted.begin(), sorted.end());
+    // The calls by time, slowest first: the quantiles, and the five slowest as data time:us.
+    std::vector<std::size_t> order(call_us.size());
+    for (std::size_t k = 0; k < order.size(); ++k)
+      order[k] = k;
+    std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return call_us[a] > call_us[b]; });
+    auto quantile = [&](double q) {
+      const std::size_t rank = static_cast<std::size_t>(q * static_cast<double>(order.size() - 1));
+      return call_us[order[order.size() - 1 - rank]];
+    };
     double total = 0.0;
     long over_200 = 0, over_1000 = 0;
     for (double us : call_us)
@@ -118,15 +119,8 @@ int main(int argc, char** argv)
       over_200 += us > 200.0;
       over_1000 += us > 1000.0;
     }
-    // The five slowest calls, slowest first, as data time:microseconds.
-    std::vector<std::size_t> order(call_us.size());
-    for (std::size_t k = 0; k < order.size(); ++k)
-      order[k] = k;
-    const std::size_t shown = std::min<std::size_t>(5, order.size());
-    std::partial_sort(order.begin(), order.begin() + shown, order.end(),
-                      [&](std::size_t a, std::size_t b) { return call_us[a] > call_us[b]; });
     std::string slowest_calls;
-    for (std::size_t i = 0; i < shown; ++i)
+    for (std::size_t i = 0; i < std::min<std::size_t>(5, order.size()); ++i)
     {
       char entry[64];
       std::snprintf(entry, sizeof entry, "%s%.2f:%.0f", i ? "," : "", samples[order[i]].t - t0, call_us[order[i]]);
@@ -135,8 +129,8 @@ int main(int argc, char** argv)
     std::printf(
         "designs=%s samples=%zu speed=%g mean_us=%.2f p50_us=%.2f p99_us=%.2f p999_us=%.1f max_us=%.1f "
         "max_at_s=%.2f over_200us=%ld over_1ms=%ld slowest=%s checksum=%.17g\n",
-        options.designs.c_str(), samples.size(), options.speed, total / samples.size(), quantile(sorted, 0.5),
-        quantile(sorted, 0.99), quantile(sorted, 0.999), sorted.back(), samples[slowest].t - t0, over_200, over_1000,
+        options.designs.c_str(), samples.size(), options.speed, total / samples.size(), quantile(0.5), quantile(0.99),
+        quantile(0.999), call_us[order.front()], samples[order.front()].t - t0, over_200, over_1000,
         slowest_calls.c_str(), checksum);
     return 0;
   }
