@@ -130,7 +130,9 @@ class RenderTest(unittest.TestCase):
         self.assertIn('%.2f s wall, %d kB max RSS' % (sim['wall_s'], sim['max_rss_kb']), self.md)
         self.assertIn('Measured 2026-11-23 at commit def5678, `--quick`', self.md)  # another run's section
         self.assertIn('| 0.63 (exact 0.64) |', self.md)
-        self.assertIn('| 17.1 (84.8) |', self.md)
+        self.assertIn('| 17.1 (84.8) |', self.md)  # no bound in these results: the older row
+        self.assertIn('sway RMS error [% of true] (harmonic model alone; causal bound) | < 35 and < half of it '
+                      '| 22.8 (88.3; 21.9) |', self.md)
         self.assertIn('random walk (2 seeds)', self.md)
         self.assertIn('300 components; 1 seed)', self.md)
 
