@@ -7,15 +7,20 @@
 
 namespace periodic_bias_compensation
 {
-bool solveToeplitz(const std::vector<double>& t, const std::vector<double>& b, std::vector<double>* x)
+bool solveToeplitz(const std::vector<double>& t, const std::vector<std::vector<double>>& b,
+                   std::vector<std::vector<double>>* x)
 {
   const int n = static_cast<int>(t.size());
   if (n == 0 || !(t[0] > 0.0))
     return false;
+  for (const std::vector<double>& column : b)
+    if (static_cast<int>(column.size()) < n)
+      return false;
   std::vector<double> forward(n, 0.0), next(n, 0.0);
-  x->assign(n, 0.0);
+  x->assign(b.size(), std::vector<double>(n, 0.0));
   forward[0] = 1.0 / t[0];
-  (*x)[0] = b[0] / t[0];
+  for (std::size_t c = 0; c < b.size(); ++c)
+    (*x)[c][0] = b[c][0] / t[0];
   for (int m = 1; m < n; ++m)
   {
     // Error of the forward vector extended by a zero; the backward vector is its reverse.
@@ -31,24 +36,42 @@ bool solveToeplitz(const std::vector<double>& t, const std::vector<double>& b, s
       const double g = i > 0 ? forward[m - i] : 0.0;
       next[i] = (f - e * g) / denominator;
     }
-    std::copy(next.begin(), next.begin() + m + 1, forward.begin());
-    double ex = 0.0;
-    for (int i = 0; i < m; ++i)
-      ex += t[m - i] * (*x)[i];
-    const double correction = b[m] - ex;
-    // Backward vector: forward reversed.
-    for (int i = 0; i <= m; ++i)
-      (*x)[i] += correction * forward[m - i];
+    forward.swap(next);
+    // Each right-hand side takes the same forward vector.
+    for (std::size_t c = 0; c < b.size(); ++c)
+    {
+      std::vector<double>& solution = (*x)[c];
+      double ex = 0.0;
+      for (int i = 0; i < m; ++i)
+        ex += t[m - i] * solution[i];
+      const double correction = b[c][m] - ex;
+      // Backward vector: forward reversed.
+      for (int i = 0; i <= m; ++i)
+        solution[i] += correction * forward[m - i];
+    }
   }
   return true;
 }
 
-bool solveBlockToeplitz(const std::vector<Eigen::Matrix3d>& r, const Eigen::MatrixXd& b, Eigen::MatrixXd* x)
+bool solveToeplitz(const std::vector<double>& t, const std::vector<double>& b, std::vector<double>* x)
+{
+  std::vector<std::vector<double>> solutions;
+  if (!solveToeplitz(t, { b }, &solutions))
+    return false;
+  *x = std::move(solutions[0]);
+  return true;
+}
+
+namespace
+{
+/// solveBlockToeplitz() with the solution kept as n blocks of 3 x Columns (fixed-size products
+/// where the number of right-hand sides is known at compile time).
+template <int Columns>
+bool solveBlocks(const std::vector<Eigen::Matrix3d>& r, const Eigen::MatrixXd& b, Eigen::MatrixXd* x)
 {
   using Eigen::Matrix3d;
+  using Block = Eigen::Matrix<double, 3, Columns>;
   const int n = static_cast<int>(r.size());
-  if (n == 0 || b.rows() != 3 * n)
-    return false;
   const double scale = r[0].trace() / 3.0;
   if (!(scale > 0.0))
     return false;
@@ -66,8 +89,9 @@ bool solveBlockToeplitz(const std::vector<Eigen::Matrix3d>& r, const Eigen::Matr
   if (!factor(q, &q_llt))
     return false;
   const int columns = static_cast<int>(b.cols());
-  x->setZero(3 * n, columns);
-  x->topRows<3>() = q_llt.solve(b.topRows<3>());
+  std::vector<Block> solution(n, Block::Zero(3, columns));
+  solution[0] = q_llt.solve(b.topRows<3>());
+  Block eta(3, columns);
   for (int m = 0; m + 1 < n; ++m)
   {
     // T_(m+1) [forward; 0] = [P; 0; delta], T_(m+1) [0; backward] = [delta^T; 0; Q].
@@ -78,28 +102,43 @@ bool solveBlockToeplitz(const std::vector<Eigen::Matrix3d>& r, const Eigen::Matr
       return false;
     const Matrix3d forward_step = q_llt.solve(delta);               // Q^-1 delta
     const Matrix3d backward_step = p_llt.solve(delta.transpose());  // P^-1 delta^T
-    for (int i = 0; i <= m + 1; ++i)
+    next_forward[0] = forward[0];
+    next_backward[0] = -forward[0] * backward_step;
+    for (int i = 1; i <= m; ++i)
     {
-      const Matrix3d f = i <= m ? forward[i] : Matrix3d::Zero();
-      const Matrix3d g = i >= 1 ? backward[i - 1] : Matrix3d::Zero();
-      next_forward[i] = f - g * forward_step;
-      next_backward[i] = g - f * backward_step;
+      next_forward[i].noalias() = forward[i] - backward[i - 1] * forward_step;
+      next_backward[i].noalias() = backward[i - 1] - forward[i] * backward_step;
     }
-    std::copy(next_forward.begin(), next_forward.begin() + m + 2, forward.begin());
-    std::copy(next_backward.begin(), next_backward.begin() + m + 2, backward.begin());
+    next_forward[m + 1].noalias() = -backward[m] * forward_step;
+    next_backward[m + 1] = backward[m];
+    forward.swap(next_forward);
+    backward.swap(next_backward);
     p -= delta.transpose() * forward_step;
     q -= delta * backward_step;
     if (!factor(q, &q_llt))
       return false;
     // T_(m+1) [x; 0] = [b_0..b_m; eta]: the new backward vector makes up the last block.
-    Eigen::MatrixXd eta = Eigen::MatrixXd::Zero(3, columns);
+    eta.setZero();
     for (int i = 0; i <= m; ++i)
-      eta.noalias() += r[m + 1 - i] * x->middleRows<3>(3 * i);
-    const Eigen::MatrixXd correction = q_llt.solve(b.middleRows<3>(3 * (m + 1)) - eta);
+      eta.noalias() += r[m + 1 - i] * solution[i];
+    const Block correction = q_llt.solve(b.middleRows<3>(3 * (m + 1)) - eta);
     for (int i = 0; i <= m + 1; ++i)
-      x->middleRows<3>(3 * i).noalias() += backward[i] * correction;
+      solution[i].noalias() += backward[i] * correction;
   }
+  x->resize(3 * n, columns);
+  for (int i = 0; i < n; ++i)
+    x->middleRows<3>(3 * i) = solution[i];
   return true;
+}
+}  // namespace
+
+bool solveBlockToeplitz(const std::vector<Eigen::Matrix3d>& r, const Eigen::MatrixXd& b, Eigen::MatrixXd* x)
+{
+  const int n = static_cast<int>(r.size());
+  if (n == 0 || b.rows() != 3 * n)
+    return false;
+  // The Wiener designs solve for displacement and velocity: two right-hand sides.
+  return b.cols() == 2 ? solveBlocks<2>(r, b, x) : solveBlocks<Eigen::Dynamic>(r, b, x);
 }
 
 }  // namespace periodic_bias_compensation

@@ -519,9 +519,11 @@ WienerHeave::Outcome WienerHeave::design(double noise_density_squared) const
     return { std::move(none), 0.0 };
   }
   auto next = std::make_shared<Design>();
-  if (!solveToeplitz(fit.autocorrelation, fit.r_position, &next->position[0]) ||
-      !solveToeplitz(fit.autocorrelation, fit.r_velocity, &next->velocity[0]))
+  std::vector<std::vector<double>> taps;
+  if (!solveToeplitz(fit.autocorrelation, { fit.r_position, fit.r_velocity }, &taps))
     return {};  // keep the last design, and its peak
+  next->position[0] = std::move(taps[0]);
+  next->velocity[0] = std::move(taps[1]);
   // The expected error E[(x - h a)^2] = var(x) - h r of taps solved from these statistics
   // (R h = r).
   double explained = 0.0, explained_velocity = 0.0;

@@ -62,6 +62,31 @@ TEST(Toeplitz, ScalarLevinsonMatchesADenseSolve)
     EXPECT_NEAR(x[i], expected[i], 1e-9 * expected.cwiseAbs().maxCoeff()) << i;
 }
 
+TEST(Toeplitz, SeveralRightHandSidesSolveAsEachAlone)
+{
+  const int n = 60;
+  std::vector<double> t(n), first(n), second(n);
+  for (int k = 0; k < n; ++k)
+  {
+    t[k] = std::exp(-0.05 * k) * std::cos(0.4 * k) + (k == 0 ? 0.2 : 0.0);
+    first[k] = std::sin(0.3 * k);
+    second[k] = std::cos(0.11 * k) - 0.5;
+  }
+  std::vector<std::vector<double>> both;
+  ASSERT_TRUE(pbc::solveToeplitz(t, { first, second }, &both));
+  ASSERT_EQ(both.size(), 2u);
+  std::vector<double> alone;
+  for (int c = 0; c < 2; ++c)
+  {
+    ASSERT_TRUE(pbc::solveToeplitz(t, c == 0 ? first : second, &alone));
+    ASSERT_EQ(both[c].size(), alone.size());
+    for (int i = 0; i < n; ++i)
+      EXPECT_EQ(both[c][i], alone[i]) << "right-hand side " << c << ", tap " << i;
+  }
+  // A right-hand side shorter than the matrix is refused.
+  EXPECT_FALSE(pbc::solveToeplitz(t, { first, std::vector<double>(n - 1, 1.0) }, &both));
+}
+
 TEST(Toeplitz, BlockLevinsonMatchesADenseSolve)
 {
   // Asymmetric blocks (R(k) != R(k)^T): the inputs lead and lag each other.

@@ -15,6 +15,10 @@ namespace periodic_bias_compensation
 /// Solves T x = b for the symmetric Toeplitz T with first column t. Returns false when T is not
 /// positive definite to working precision.
 bool solveToeplitz(const std::vector<double>& t, const std::vector<double>& b, std::vector<double>* x);
+/// The same for several right-hand sides b[c] (of at least t's length) at the cost of one
+/// recursion: x[c] solves T x[c] = b[c].
+bool solveToeplitz(const std::vector<double>& t, const std::vector<std::vector<double>>& b,
+                   std::vector<std::vector<double>>* x);
 
 /// Solves sum_j R(i - j) x_j = b_i, i, j = 0..n-1, for three inputs: R(k) = r[k] (3 x 3) for
 /// k >= 0 and R(-k) = r[k]^T (the block-Toeplitz matrix is symmetric), b and x n blocks of three
