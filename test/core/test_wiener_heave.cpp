@@ -328,6 +328,7 @@ TEST(WienerHeave, ANewRateStartsOver)
 {
   const Sea wind(1.0 / 8.0, 1.8, 5);
   WienerHeave heave(0.03);
+  const auto decimation = [](double rate) { return static_cast<int>(std::lround(WienerHeave::kDesignPeriod * rate)); };
   double x, v, a;
   long i = 0;
   for (; i < 60 * 50; ++i)
@@ -335,19 +336,19 @@ TEST(WienerHeave, ANewRateStartsOver)
     wind.at(i / 50.0, &x, &v, &a);
     heave.update(a, (i % 2 ? 1.004 : 0.996) / 50.0, 1e-5);
   }
-  EXPECT_EQ(heave.decimation(), 25);
+  EXPECT_EQ(heave.decimation(), decimation(50.0));
   ASSERT_TRUE(heave.designed());
   const double peak = heave.peakFrequency();
   wind.at(i / 50.0, &x, &v, &a);
   EXPECT_TRUE(heave.update(a, 1.05 / 50.0, 1e-5).valid);  // within kPeriodChange
-  EXPECT_EQ(heave.decimation(), 25);
+  EXPECT_EQ(heave.decimation(), decimation(50.0));
   EXPECT_EQ(heave.peakFrequency(), peak);
   EXPECT_FALSE(heave.update(a, 1.0 / 100.0, 1e-5).valid);  // 100 Hz: a new record
-  EXPECT_EQ(heave.decimation(), 50);
+  EXPECT_EQ(heave.decimation(), decimation(100.0));
   EXPECT_FALSE(heave.designed());
   // Unknown (0) or absurd periods are not taken and change nothing.
   EXPECT_FALSE(heave.update(a, 0.0, 1e-5).valid);
-  EXPECT_EQ(heave.decimation(), 50);
+  EXPECT_EQ(heave.decimation(), decimation(100.0));
 }
 
 // No sea, a bias that wanders (random walk and a 60 s drift of 0.06 m/s^2): no heave, on either

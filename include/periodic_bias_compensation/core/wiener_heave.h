@@ -6,8 +6,8 @@
 // doubly integrated into heave. The sea's own spectrum says where heave is: a wind sea or a
 // swell has almost no energy below about 0.6 times its peak frequency. WienerHeave therefore
 //
-//  1. low-passes the acceleration (two moving averages of D samples, D dt ~ 0.5 s) and keeps it
-//     at the full rate, and every D-th value at the design rate 1 / (D dt) ~ 2 Hz;
+//  1. low-passes the acceleration (two moving averages of D samples, D dt ~ 0.25 s) and keeps it
+//     at the full rate, and every D-th value at the design rate 1 / (D dt) ~ 4 Hz;
 //  2. every kRedesignInterval (kEarlyRedesignInterval while the record is shorter than
 //     kEarlyRecord: each design from a short record improves on the last by more), from the last
 //     kDesignWindow of design-rate values: a spectrum, Welch's (Hann segments of kSegment, half
@@ -86,17 +86,17 @@ struct WienerHeaveOutput
 class WienerHeave
 {
 public:
-  static constexpr double kDesignPeriod = 0.5;           ///< target spacing of the design rate [s]
+  static constexpr double kDesignPeriod = 0.25;          ///< target spacing of the design rate [s]
   static constexpr double kFirstDesign = 20.0;           ///< data before the first design [s]
   static constexpr double kRestartDesign = 50.0;         ///< of a record restartRecord() began [s]
   static constexpr double kDesignWindow = 600.0;         ///< data a design uses at most [s]
   static constexpr double kRedesignInterval = 30.0;      ///< [s]
   static constexpr double kEarlyRedesignInterval = 5.0;  ///< while the record is short [s]
   static constexpr double kEarlyRecord = 300.0;          ///< a record shorter than this is short [s]
-  static constexpr int kSegment = 256;                   ///< Welch segment [design-rate samples]
-  static constexpr int kMaxOrder = 160;                  ///< of the Burg model [design-rate samples]
-  static constexpr int kMinSegment = 40;                 ///< the shortest record designed from
-  static constexpr int kDftSize = 1024;                  ///< zero-padded transform of a segment
+  static constexpr int kSegment = 512;                   ///< Welch segment [design-rate samples]
+  static constexpr int kMaxOrder = 320;                  ///< of the Burg model [design-rate samples]
+  static constexpr int kMinSegment = 80;                 ///< the shortest record designed from
+  static constexpr int kDftSize = 2048;                  ///< zero-padded transform of a segment
   static constexpr double kSpanPeriods = 6.0;            ///< FIR span in peak periods
   static constexpr double kMinSpan = 20.0;               ///< [s]
   static constexpr double kMaxSpan = 120.0;              ///< [s]
@@ -125,7 +125,7 @@ public:
   static constexpr int kHorizontalCrossSegments = 2;
   /// White noise added to every input of a horizontal design that reads the other axes, a share of
   /// the inputs' mean variance: the taps fit no coherence a few segments hold by chance [-].
-  static constexpr double kLoading = 2e-3;
+  static constexpr double kLoading = 4e-3;
   /// A horizontal axis reads the other axes where its own design holds a sea: its wave this many
   /// times the design's expected error (at rest the others' slow drifts would make one) [-].
   static constexpr double kCompanionSea = 2.0;
