@@ -102,7 +102,7 @@ public:
   static constexpr double kMaxSpan = 120.0;              ///< [s]
   static constexpr double kNoiseMargin = 3.0;            ///< multiples of the noise floor taken as noise
   static constexpr double kDesignFade = 2.0;             ///< [s]
-  static constexpr double kDesignDelay = 0.1;            ///< from a design's data to its use [s]
+  static constexpr double kDesignDelay = 0.3;            ///< from a design's data to its use [s]
   static constexpr double kMinPeriod = 1e-4;             ///< shortest sample period taken (10 kHz) [s]
   static constexpr double kMaxPeriod = 10.0;             ///< longest [s]
   /// Relative change of the sample period that starts the record over (the buffers and the
