@@ -4,7 +4,7 @@
 For each scenario and seed, simulate_imu writes the sensor and the truth; the level-frame
 acceleration at base_link is formed as well as the sensor allows (the true attitude, the lever arm
 taken off with the measured gyro) and, as the estimator does, low-passed by two moving averages of
-about 0.5 s and taken every such step. For each axis asked for, a causal FIR of --span seconds (and
+--step seconds (0.25 s, WienerHeave::kDesignPeriod) and taken every such step. For each axis asked for, a causal FIR of --span seconds (and
 a constant) is fitted by least squares to the axis's true wave motion on one half of the record
 (after --settle) and scored on the other, both ways round; with --window T0 T1 it is fitted on the
 whole record after --settle and scored from T0 to T1 s (the first minutes: what a FIR of a short
@@ -19,7 +19,7 @@ beside `evaluate_compensator --settle S` (same seeds).
 
 usage: wave_hindsight.py --devel DEVEL_LIB_DIR --scenario A.yaml [--scenario B.yaml ...]
                          [--axes z] [--inputs own] [--seeds 3] [--duration 1200] [--settle 200]
-                         [--span 60] [--window T0 T1]
+                         [--span 60] [--step 0.25] [--window T0 T1]
 """
 import argparse
 import os
@@ -62,12 +62,12 @@ def level_acceleration(columns, arm):
     return level, dt
 
 
-def hindsight_error(inputs, truth, dt, settle, span, window=None):
+def hindsight_error(inputs, truth, dt, settle, span, window=None, step_s=0.25):
     """Mean squared error over true variance of the FIR from `inputs` (n x k, or n) to `truth`
     (n), fitted on one half and scored on the other (window None), or fitted after settle and
     scored within window = (T0, T1) [s]. Also returns the true motion's standard deviation there."""
     inputs = np.asarray(inputs, dtype=float).reshape(len(truth), -1)
-    step = max(1, int(round(0.5 / dt)))
+    step = max(1, int(round(step_s / dt)))
     box = np.ones(step) / step
     values = [np.convolve(np.convolve(column, box)[:len(column)], box)[:len(column)][step - 1::step]
               for column in inputs.T]
@@ -112,6 +112,8 @@ def main():
     parser.add_argument('--duration', type=float, default=1200.0)
     parser.add_argument('--settle', type=float, default=200.0)
     parser.add_argument('--span', type=float, default=60.0, help='FIR span [s]')
+    parser.add_argument('--step', type=float, default=0.25,
+                        help='moving averages and spacing of the FIR input [s] (the estimator: 0.25)')
     parser.add_argument('--window', type=float, nargs=2, metavar=('T0', 'T1'),
                         help='score from T0 to T1 s of the record, the FIR fitted after --settle')
     args = parser.parse_args()
@@ -141,7 +143,7 @@ def main():
                     for which in inputs:
                         source = level[:, axis] if which == 'own' else level
                         ratio, _ = hindsight_error(source, columns['wave_p' + AXES[axis]], dt, args.settle,
-                                                   args.span, args.window)
+                                                   args.span, args.window, args.step)
                         ratios.setdefault((axis, which), []).append(ratio)
                 print('%s seed %d done' % (os.path.basename(scenario), seed), file=sys.stderr)
             for (axis, which), values in sorted(ratios.items()):

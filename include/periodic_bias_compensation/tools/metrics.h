@@ -138,8 +138,10 @@ Errors integrateRaw(const std::vector<sim::Sample>& samples, double gravity);
 
 /// The lowest wave error a causal linear filter of each axis's own level acceleration reaches on
 /// this run, with the truth to fit it: the acceleration (reported orientation, `gravity` off z)
-/// through the spectral heave estimate's low-pass (two moving averages over about 0.5 s), an FIR of
-/// kBoundSpan over those values 0.5 s apart ending at each sample, plus a constant; the taps fitted
+/// through two moving averages over about 0.5 s (twice the spectral estimate's, whose shorter
+/// low-pass lowers the bound by up to a point of the true wave RMS: docs/benchmarks.md, "Surge and
+/// sway"), an FIR of kBoundSpan over those values 0.5 s apart ending at each sample, plus a
+/// constant; the taps fitted
 /// by least squares to the true wave displacement of the IMU's point (base_link's plus the lever
 /// arm's `R r - r`, `lever_arm` in base_link) on one half of the run and applied to the other
 /// (each half predicted by the other's fit), where kBoundSpan of history exists. No causal linear
