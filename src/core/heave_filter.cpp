@@ -128,12 +128,19 @@ HeaveOutput HeaveFilter::update(double a, double dt)
     dphi[k] = omega_ * ((k > 0 ? phi[k - 1] : 0.0) - phi[k]);
   for (int k = 0; k < kOrder; ++k)
     ddphi[k] = omega_ * ((k > 0 ? dphi[k - 1] : 0.0) - dphi[k]);
-  normal_.noalias() += phi * phi.transpose();
-  moments_ += phi * out.position;
-  // A small ridge: until a few samples are in, the normal matrix is singular.
-  Eigen::Matrix<double, kOrder, kOrder> regularised = normal_;
-  regularised.diagonal().array() += 1e-9 * (1.0 + normal_.trace());
-  coefficients_ = solvePositiveDefinite(regularised, moments_);
+  const Eigen::Matrix<double, kOrder, kOrder> normal = normal_ + phi * phi.transpose();
+  const State moments = moments_ + phi * out.position;
+  // Late in the span the free responses fall below the sums' precision: once a sample leaves
+  // both unchanged, the fit is the last one, not solved again.
+  if (normal != normal_ || moments != moments_)
+  {
+    normal_ = normal;
+    moments_ = moments;
+    // A small ridge: until a few samples are in, the normal matrix is singular.
+    Eigen::Matrix<double, kOrder, kOrder> regularised = normal_;
+    regularised.diagonal().array() += 1e-9 * (1.0 + normal_.trace());
+    coefficients_ = solvePositiveDefinite(regularised, moments_);
+  }
   out.position -= phi.dot(coefficients_);
   out.velocity -= dphi.dot(coefficients_);
   out.acceleration -= ddphi.dot(coefficients_);

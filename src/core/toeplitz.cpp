@@ -10,46 +10,52 @@ namespace periodic_bias_compensation
 bool solveToeplitz(const std::vector<double>& t, const std::vector<std::vector<double>>& b,
                    std::vector<std::vector<double>>* x)
 {
+  using Eigen::VectorXd;
   const int n = static_cast<int>(t.size());
   if (n == 0 || !(t[0] > 0.0))
     return false;
   for (const std::vector<double>& column : b)
     if (static_cast<int>(column.size()) < n)
       return false;
-  std::vector<double> forward(n, 0.0), next(n, 0.0);
-  x->assign(b.size(), std::vector<double>(n, 0.0));
-  forward[0] = 1.0 / t[0];
+  // t reversed: t[m - i], i = 0..m-1, are its entries n-1-m .. n-2, in a row.
+  const VectorXd lags = Eigen::Map<const VectorXd>(t.data(), n).reverse();
+  // The forward vector and, beside it, the backward one (its reverse), so that every step is a
+  // few contiguous, vectorised passes.
+  VectorXd forward = VectorXd::Zero(n), backward = VectorXd::Zero(n);
+  VectorXd next_forward = VectorXd::Zero(n), next_backward = VectorXd::Zero(n);
+  forward[0] = backward[0] = 1.0 / t[0];
+  std::vector<VectorXd> solutions(b.size(), VectorXd::Zero(n));
   for (std::size_t c = 0; c < b.size(); ++c)
-    (*x)[c][0] = b[c][0] / t[0];
+    solutions[c][0] = b[c][0] / t[0];
   for (int m = 1; m < n; ++m)
   {
-    // Error of the forward vector extended by a zero; the backward vector is its reverse.
-    double e = 0.0;
-    for (int i = 0; i < m; ++i)
-      e += t[m - i] * forward[i];
+    const auto lag = lags.segment(n - 1 - m, m);
+    // Error of the forward vector extended by a zero; the backward vector's is the same.
+    const double e = lag.dot(forward.head(m));
     const double denominator = 1.0 - e * e;
     if (!(denominator > 1e-12))
       return false;
-    for (int i = 0; i <= m; ++i)
-    {
-      const double f = i < m ? forward[i] : 0.0;
-      const double g = i > 0 ? forward[m - i] : 0.0;
-      next[i] = (f - e * g) / denominator;
-    }
-    forward.swap(next);
-    // Each right-hand side takes the same forward vector.
+    // forward' = ([forward; 0] - e [0; backward]) / d, backward' = ([0; backward] - e [forward; 0]) / d.
+    const double scale = 1.0 / denominator;
+    next_forward.head(m) = scale * forward.head(m);
+    next_forward[m] = 0.0;
+    next_forward.segment(1, m) -= (e * scale) * backward.head(m);
+    next_backward[0] = 0.0;
+    next_backward.segment(1, m) = scale * backward.head(m);
+    next_backward.head(m) -= (e * scale) * forward.head(m);
+    forward.swap(next_forward);
+    backward.swap(next_backward);
+    // Each right-hand side takes the same backward vector.
     for (std::size_t c = 0; c < b.size(); ++c)
     {
-      std::vector<double>& solution = (*x)[c];
-      double ex = 0.0;
-      for (int i = 0; i < m; ++i)
-        ex += t[m - i] * solution[i];
-      const double correction = b[c][m] - ex;
-      // Backward vector: forward reversed.
-      for (int i = 0; i <= m; ++i)
-        solution[i] += correction * forward[m - i];
+      VectorXd& solution = solutions[c];
+      const double correction = b[c][m] - lag.dot(solution.head(m));
+      solution.head(m + 1) += correction * backward.head(m + 1);
     }
   }
+  x->resize(b.size());
+  for (std::size_t c = 0; c < b.size(); ++c)
+    (*x)[c].assign(solutions[c].data(), solutions[c].data() + n);
   return true;
 }
 
@@ -64,12 +70,35 @@ bool solveToeplitz(const std::vector<double>& t, const std::vector<double>& b, s
 
 namespace
 {
-/// solveBlockToeplitz() with the solution kept as n blocks of 3 x Columns (fixed-size products
-/// where the number of right-hand sides is known at compile time).
+/// out = a + b c for thin a and b (many rows, three columns) and a small c: one vectorised pass
+/// over each column (out may be a).
+template <typename Out, typename A, typename B, typename C>
+void addProduct(Out&& out, const A& a, const B& b, const C& c)
+{
+  for (int j = 0; j < c.cols(); ++j)
+    out.col(j) = a.col(j) + b.col(0) * c(0, j) + b.col(1) * c(1, j) + b.col(2) * c(2, j);
+}
+
+/// a^T b for thin a (three columns) and b: contiguous dot products of their columns.
+template <int Columns, typename A, typename B>
+Eigen::Matrix<double, 3, Columns> innerProduct(const A& a, const B& b)
+{
+  Eigen::Matrix<double, 3, Columns> product(3, b.cols());
+  for (int j = 0; j < b.cols(); ++j)
+    for (int i = 0; i < 3; ++i)
+      product(i, j) = a.col(i).dot(b.col(j));
+  return product;
+}
+
+/// solveBlockToeplitz() with the blocks stacked: a predictor's or the solution's block i is rows
+/// 3 i .. 3 i + 2 of one matrix, so that each step of the recursion is a few products of long,
+/// thin matrices instead of a loop over 3 x 3 products.
 template <int Columns>
 bool solveBlocks(const std::vector<Eigen::Matrix3d>& r, const Eigen::MatrixXd& b, Eigen::MatrixXd* x)
 {
   using Eigen::Matrix3d;
+  using Stack = Eigen::Matrix<double, Eigen::Dynamic, 3>;
+  using Solution = Eigen::Matrix<double, Eigen::Dynamic, Columns>;
   using Block = Eigen::Matrix<double, 3, Columns>;
   const int n = static_cast<int>(r.size());
   const double scale = r[0].trace() / 3.0;
@@ -81,36 +110,39 @@ bool solveBlocks(const std::vector<Eigen::Matrix3d>& r, const Eigen::MatrixXd& b
     llt->compute(m);
     return llt->info() == Eigen::Success && llt->matrixLLT().diagonal().minCoeff() > 1e-6 * std::sqrt(scale);
   };
-  // T_m forward = [P; 0 ...], forward[0] = I; T_m backward = [... 0; Q], backward[m] = I.
-  std::vector<Matrix3d> forward(n), backward(n), next_forward(n), next_backward(n);
-  forward[0] = backward[0] = Matrix3d::Identity();
+  // R(n-1)^T .. R(0)^T stacked: R(m+1-i)^T, i = 0..m, are consecutive blocks (n-2-m .. n-2), and
+  // a sum of R(m+1-i) times a stacked block i is nine contiguous dot products.
+  Stack lags(3 * n, 3);
+  for (int k = 0; k < n; ++k)
+    lags.middleRows<3>(3 * (n - 1 - k)) = r[k].transpose();
+  // T_m forward = [P; 0 ...], forward[0] = I; T_m backward = [... 0; Q], backward[m] = I. Blocks
+  // past m are zero.
+  Stack forward = Stack::Zero(3 * n, 3), backward = Stack::Zero(3 * n, 3);
+  Stack next_forward = Stack::Zero(3 * n, 3), next_backward = Stack::Zero(3 * n, 3);
+  forward.topRows<3>() = backward.topRows<3>() = Matrix3d::Identity();
   Matrix3d p = r[0], q = r[0];
   Eigen::LLT<Matrix3d> p_llt, q_llt;
   if (!factor(q, &q_llt))
     return false;
   const int columns = static_cast<int>(b.cols());
-  std::vector<Block> solution(n, Block::Zero(3, columns));
-  solution[0] = q_llt.solve(b.topRows<3>());
-  Block eta(3, columns);
+  Solution solution = Solution::Zero(3 * n, columns);
+  solution.template topRows<3>() = q_llt.solve(b.topRows<3>());
   for (int m = 0; m + 1 < n; ++m)
   {
+    const int rows = 3 * (m + 1);  // blocks 0..m
+    const auto lag = lags.middleRows(3 * (n - 2 - m), rows);
     // T_(m+1) [forward; 0] = [P; 0; delta], T_(m+1) [0; backward] = [delta^T; 0; Q].
-    Matrix3d delta = Matrix3d::Zero();
-    for (int i = 0; i <= m; ++i)
-      delta.noalias() += r[m + 1 - i] * forward[i];
+    const Matrix3d delta = innerProduct<3>(lag, forward.topRows(rows));
     if (!factor(p, &p_llt))
       return false;
     const Matrix3d forward_step = q_llt.solve(delta);               // Q^-1 delta
     const Matrix3d backward_step = p_llt.solve(delta.transpose());  // P^-1 delta^T
-    next_forward[0] = forward[0];
-    next_backward[0] = -forward[0] * backward_step;
-    for (int i = 1; i <= m; ++i)
-    {
-      next_forward[i].noalias() = forward[i] - backward[i - 1] * forward_step;
-      next_backward[i].noalias() = backward[i - 1] - forward[i] * backward_step;
-    }
-    next_forward[m + 1].noalias() = -backward[m] * forward_step;
-    next_backward[m + 1] = backward[m];
+    // forward'[i] = forward[i] - backward[i-1] Q^-1 delta, backward'[i] = backward[i-1] -
+    // forward[i] P^-1 delta^T, for i = 0..m+1 (forward[m+1] = 0, backward[-1] = 0).
+    next_forward.topRows<3>() = forward.topRows<3>();
+    addProduct(next_forward.middleRows(3, rows), forward.middleRows(3, rows), backward.topRows(rows), -forward_step);
+    next_backward.topRows<3>() = -backward_step;  // forward[0] = I
+    addProduct(next_backward.middleRows(3, rows), backward.topRows(rows), forward.middleRows(3, rows), -backward_step);
     forward.swap(next_forward);
     backward.swap(next_backward);
     p -= delta.transpose() * forward_step;
@@ -118,16 +150,11 @@ bool solveBlocks(const std::vector<Eigen::Matrix3d>& r, const Eigen::MatrixXd& b
     if (!factor(q, &q_llt))
       return false;
     // T_(m+1) [x; 0] = [b_0..b_m; eta]: the new backward vector makes up the last block.
-    eta.setZero();
-    for (int i = 0; i <= m; ++i)
-      eta.noalias() += r[m + 1 - i] * solution[i];
+    const Block eta = innerProduct<Columns>(lag, solution.topRows(rows));
     const Block correction = q_llt.solve(b.middleRows<3>(3 * (m + 1)) - eta);
-    for (int i = 0; i <= m + 1; ++i)
-      solution[i].noalias() += backward[i] * correction;
+    addProduct(solution.topRows(rows + 3), solution.topRows(rows + 3), backward.topRows(rows + 3), correction);
   }
-  x->resize(3 * n, columns);
-  for (int i = 0; i < n; ++i)
-    x->middleRows<3>(3 * i) = solution[i];
+  *x = solution;
   return true;
 }
 }  // namespace
