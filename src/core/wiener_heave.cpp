@@ -192,43 +192,43 @@ WienerHeaveOutput WienerHeave::step(double a, double period, double noise_densit
   return out;
 }
 
+void WienerHeave::Design::prepare()
+{
+  for (int c = 0; c < kChannels; ++c)
+  {
+    position_oldest_first[c].assign(position[c].rbegin(), position[c].rend());
+    velocity_oldest_first[c].assign(velocity[c].rbegin(), velocity[c].rend());
+    double position_sum = 0.0, velocity_sum = 0.0;
+    for (std::size_t k = 0; k < position[c].size(); ++k)
+    {
+      position_sum += position[c][k];
+      velocity_sum += velocity[c][k];
+    }
+    position_offset[c] = mean[c] * position_sum;
+    velocity_offset[c] = mean[c] * velocity_sum;
+  }
+}
+
 void WienerHeave::apply(const Design& d, double* x, double* v) const
 {
-  // The values D samples apart ending at the newest lie next to each other in its ring,
-  // newest last: walked backwards from the newest to the ring's start, then from its end.
+  using Values = Eigen::Map<const Eigen::VectorXd>;
+  // The values D samples apart ending at the newest lie next to each other in its ring, newest
+  // last: the newer ones up to the newest, the older ones (if the taps reach past the ring's
+  // start) at the ring's end. Dot products with the taps oldest first, vectorised.
   const int place = newest_ % ring_length_;
   *x = *v = 0.0;
   for (int c = 0; c < kChannels && !d.position[c].empty(); ++c)
   {
     const double* ring = channels_[c].history.data() + (newest_ / ring_length_) * ring_length_;
     const int taps = static_cast<int>(d.position[c].size());
-    const int before_wrap = std::min(taps, place + 1);
-    // Four partial sums each: four independent chains of additions instead of one.
-    double px[4] = { 0.0, 0.0, 0.0, 0.0 }, pv[4] = { 0.0, 0.0, 0.0, 0.0 };
-    const double* position = d.position[c].data();
-    const double* velocity = d.velocity[c].data();
-    const double mean = d.mean[c];
-    auto accumulate = [&](const double* newest, int first_tap, int end_tap) {
-      const double* value = newest + first_tap;  // value[-k]: tap k's input
-      int k = first_tap;
-      for (; k + 4 <= end_tap; k += 4)
-        for (int j = 0; j < 4; ++j)
-        {
-          const double centred = value[-(k + j)] - mean;
-          px[j] += position[k + j] * centred;
-          pv[j] += velocity[k + j] * centred;
-        }
-      for (; k < end_tap; ++k)
-      {
-        const double centred = value[-k] - mean;
-        px[0] += position[k] * centred;
-        pv[0] += velocity[k] * centred;
-      }
-    };
-    accumulate(ring + place, 0, before_wrap);
-    accumulate(ring + ring_length_ - 1, before_wrap, taps);
-    *x += (px[0] + px[1]) + (px[2] + px[3]);
-    *v += (pv[0] + pv[1]) + (pv[2] + pv[3]);
+    const int newer = std::min(taps, place + 1);
+    const int older = taps - newer;
+    const Values position(d.position_oldest_first[c].data(), taps);
+    const Values velocity(d.velocity_oldest_first[c].data(), taps);
+    const Values recent(ring + place + 1 - newer, newer);
+    const Values wrapped(ring + ring_length_ - older, older);
+    *x += position.tail(newer).dot(recent) + position.head(older).dot(wrapped) - d.position_offset[c];
+    *v += velocity.tail(newer).dot(recent) + velocity.head(older).dot(wrapped) - d.velocity_offset[c];
   }
 }
 
@@ -516,6 +516,7 @@ WienerHeave::Outcome WienerHeave::design(double noise_density_squared) const
     none->position[0].assign(1, 0.0);
     none->velocity[0].assign(1, 0.0);
     none->mean = means;
+    none->prepare();
     return { std::move(none), 0.0 };
   }
   auto next = std::make_shared<Design>();
@@ -550,6 +551,7 @@ WienerHeave::Outcome WienerHeave::design(double noise_density_squared) const
   else if (companions && segments >= kCrossSegments && companionDesign(sea, fit, means, &joint) &&
            joint.error_variance < next->error_variance)
     *next = std::move(joint);
+  next->prepare();
   return { std::move(next), sea.peak_frequency };
 }
 

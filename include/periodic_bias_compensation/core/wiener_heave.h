@@ -221,9 +221,15 @@ private:
     std::array<std::vector<double>, kChannels> velocity;
     /// The design window's mean input, taken off first.
     std::array<double, kChannels> mean{};
+    /// As apply() reads them (prepare()): the taps oldest first, and what the mean adds to each
+    /// FIR's output (the mean times the taps' sum).
+    std::array<std::vector<double>, kChannels> position_oldest_first, velocity_oldest_first;
+    std::array<double, kChannels> position_offset{}, velocity_offset{};
     double error_variance = 0.0;
     double velocity_error_variance = 0.0;
     double wave_variance = 0.0;
+    /// Fills the fields apply() reads from the taps and the mean.
+    void prepare();
   };
   /// How a density of the record was estimated, which decides what is taken as wave in it.
   enum class Estimate
