@@ -277,34 +277,31 @@ std::vector<double> WienerHeave::windowResponse(int segment) const
 std::vector<double> WienerHeave::burg(int order, double mean) const
 {
   // Forward and backward prediction errors; each stage's reflection coefficient minimises their
-  // summed power (Burg), which keeps the model stable (|k| < 1).
+  // summed power (Burg), which keeps the model stable (|k| < 1). Stage m pairs forward[i] with
+  // backward[i - 1], i = m..n-1; the backward errors are kept shifted by m (backward[i] at
+  // backward_shifted[i - m]), so that both runs start at fixed places and every pass is a
+  // vectorised one over contiguous values.
   const std::vector<double>& decimated = record();
   const int n = static_cast<int>(decimated.size());
-  std::vector<double> forward(n), backward(n), a(1, 1.0), previous;
-  double power = 0.0;
+  Eigen::VectorXd forward(n), backward_shifted(n), old_forward(n);
+  std::vector<double> a(1, 1.0), previous;
   for (int i = 0; i < n; ++i)
+    forward[i] = decimated[i] - mean;
+  backward_shifted = forward;
+  double power = forward.squaredNorm() / n;
+  for (int m = 1; m <= order && m < n; ++m)
   {
-    forward[i] = backward[i] = decimated[i] - mean;
-    power += forward[i] * forward[i];
-  }
-  power /= n;
-  for (int m = 1; m <= order; ++m)
-  {
-    double cross = 0.0, sum = 0.0;
-    for (int i = m; i < n; ++i)
-    {
-      cross += forward[i] * backward[i - 1];
-      sum += forward[i] * forward[i] + backward[i - 1] * backward[i - 1];
-    }
+    const int length = n - m;
+    auto f = forward.segment(m, length);
+    auto b = backward_shifted.head(length);
+    const double cross = f.dot(b);
+    const double sum = f.squaredNorm() + b.squaredNorm();
     if (!(sum > 0.0))
       break;
     const double k = -2.0 * cross / sum;
-    for (int i = n - 1; i >= m; --i)
-    {
-      const double f = forward[i];
-      forward[i] = f + k * backward[i - 1];
-      backward[i] = backward[i - 1] + k * f;
-    }
+    old_forward.head(length) = f;
+    f += k * b;
+    b += k * old_forward.head(length);
     a.push_back(0.0);
     previous = a;
     for (int j = 1; j <= m; ++j)
