@@ -416,7 +416,7 @@ def run(args):
         for name in bench_render.SECTIONS:  # the order of measurement
             if name in only:
                 section = methods[name]()
-                section['run'] = {k: run_info[k] for k in ('id', 'date', 'commit', 'quick')}
+                section['run'] = {k: run_info[k] for k in ('id', 'date', 'commit', 'quick', 'machine', 'cores')}
                 results.setdefault('sections', {})[name] = section
     except (RuntimeError, subprocess.CalledProcessError) as e:
         log('error: %s' % e)

@@ -38,8 +38,11 @@ def measured_note(section, header_run):
     run = section.get('run', {})
     if not header_run or run.get('id') == header_run.get('id'):
         return ''
-    return '\nMeasured %s at commit %s%s (the other sections: see the top).\n' % (
-        run.get('date', '?'), run.get('commit', '?'), ', `--quick`' if run.get('quick') else '')
+    machine = ''
+    if run.get('machine') and run.get('machine') != header_run.get('machine'):
+        machine = ', on %s, %s cores' % (run['machine'], run.get('cores', '?'))
+    return '\nMeasured %s at commit %s%s%s (the other sections: see the top).\n' % (
+        run.get('date', '?'), run.get('commit', '?'), machine, ', `--quick`' if run.get('quick') else '')
 
 
 def core_table(rows):

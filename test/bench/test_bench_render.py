@@ -62,6 +62,14 @@ class RenderTest(unittest.TestCase):
             self.assertIn(str(run[key]), self.md)
         self.assertIn('%d cores' % run['cores'], self.md)
 
+    def test_another_runs_machine_named_where_it_differs(self):
+        results = copy.deepcopy(FIXTURE)
+        run = results['sections']['simulator-speed']['run']
+        run.update(machine='Another CPU', cores=4)
+        self.assertIn('Measured 2026-11-23 at commit def5678, on Another CPU, 4 cores, `--quick`', render(results))
+        run.update(machine=FIXTURE['run']['machine'], cores=FIXTURE['run']['cores'])
+        self.assertIn('Measured 2026-11-23 at commit def5678, `--quick`', render(results))
+
     def test_accuracy_tables_verbatim(self):
         for name in ('accuracy', 'external-accuracy'):
             for scenario in self.sections[name]['scenarios']:
