@@ -505,8 +505,9 @@ std::string boundTable(const std::map<std::string, std::vector<metrics::Errors>>
                : "\nCausal bound on the wave error: not given (the run ends before " + format(from, "%.0f") +
                      " s, where the bound has its history).\n";
   table << "\nWave error against the causal bound, from " << format(from, "%.0f")
-        << " s to the end: the best a causal linear filter of the axis's own level acceleration does there (FIR of "
-        << format(metrics::kBoundSpan, "%.0f")
+        << " s to the end: the best a causal linear filter of the axis's own level acceleration does there "
+           "(through the spectral estimate's low-pass, "
+        << format(metrics::kBoundStep, "%.2f") << " s; FIR of " << format(metrics::kBoundSpan, "%.0f")
         << " s, fitted by least squares to the truth of the other half of the run), and the default mode over "
            "the same span; medians over seeds:\n\n"
            "| axis | bound [% of true wave RMS] | default [% of true wave RMS] | bound [% of Hs] "

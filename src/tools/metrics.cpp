@@ -147,11 +147,11 @@ Errors causalBound(const std::vector<sim::Sample>& samples, double gravity, doub
 {
   const long n = static_cast<long>(samples.size());
   const double rate = (n - 1) / (samples.back().stamp - samples.front().stamp);
-  const int spacing = std::max(1, static_cast<int>(std::lround(0.5 * rate)));
+  const int spacing = std::max(1, static_cast<int>(std::lround(kBoundStep * rate)));
   const long taps =
       std::max(1L, std::min(static_cast<long>(std::lround(kBoundSpan * rate / spacing)), n / (4 * spacing)));
-  // Fit rows every fifth of the spacing: more rows than taps by far, fewer than samples.
-  const int stride = std::max(1, spacing / 5);
+  // Fit rows every 0.1 s: more rows than taps by far, fewer than samples.
+  const int stride = std::max(1, static_cast<int>(std::lround(0.1 * rate)));
   std::array<std::vector<double>, 3> low;  // the acceleration through two moving averages
   std::array<std::vector<double>, 3> target;
   std::vector<Vector3> lever(n);

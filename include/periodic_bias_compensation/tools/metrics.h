@@ -24,6 +24,7 @@
 
 #include "periodic_bias_compensation/core/compensator.h"
 #include "periodic_bias_compensation/core/frequency_tracker.h"
+#include "periodic_bias_compensation/core/wiener_heave.h"
 #include "periodic_bias_compensation/sim/types.h"
 
 namespace periodic_bias_compensation::metrics
@@ -138,10 +139,9 @@ Errors integrateRaw(const std::vector<sim::Sample>& samples, double gravity);
 
 /// The lowest wave error a causal linear filter of each axis's own level acceleration reaches on
 /// this run, with the truth to fit it: the acceleration (reported orientation, `gravity` off z)
-/// through two moving averages over about 0.5 s (twice the spectral estimate's, whose shorter
-/// low-pass lowers the bound by up to a point of the true wave RMS: docs/benchmarks.md, "Surge and
-/// sway"), an FIR of kBoundSpan over those values 0.5 s apart ending at each sample, plus a
-/// constant; the taps fitted
+/// through two moving averages over about kBoundStep (the spectral estimate's low-pass), an FIR of
+/// kBoundSpan over those values kBoundStep apart ending at each sample, plus a constant; the taps
+/// fitted
 /// by least squares to the true wave displacement of the IMU's point (base_link's plus the lever
 /// arm's `R r - r`, `lever_arm` in base_link) on one half of the run and applied to the other
 /// (each half predicted by the other's fit), where kBoundSpan of history exists. No causal linear
@@ -149,7 +149,8 @@ Errors integrateRaw(const std::vector<sim::Sample>& samples, double gravity);
 /// inputs (the attitude, the other axes) could. Scored as the wave motion at base_link from
 /// `settle` + kBoundSpan [s] on (the first kBoundSpan lacks the history); its slow motion is the
 /// truth.
-constexpr double kBoundSpan = 120.0;  ///< [s], the spectral heave estimate's longest span
+constexpr double kBoundSpan = 120.0;                       ///< [s], the spectral heave estimate's longest span
+constexpr double kBoundStep = WienerHeave::kDesignPeriod;  ///< [s]
 Errors causalBound(const std::vector<sim::Sample>& samples, double gravity, double settle, const Vector3& lever_arm);
 
 /// Value below which `share` (0..1) of `values` lie, nearest rank: the element of rank
