@@ -4,8 +4,8 @@
 For each scenario and seed, simulate_imu writes the sensor and the truth; the level-frame
 acceleration at base_link is formed as well as the sensor allows (the true attitude, the lever arm
 taken off with the measured gyro) and, as the estimator does, low-passed by two moving averages of
---step seconds (0.25 s, WienerHeave::kDesignPeriod) and taken every such step. For each axis asked for, a causal FIR of --span seconds (and
-a constant) is fitted by least squares to the axis's true wave motion on one half of the record
+--step seconds (0.25 s, WienerHeave::kDesignPeriod) and taken every such step. For each axis
+asked for, a causal FIR of --span seconds (and a constant) is fitted by least squares to the axis's true wave motion on one half of the record
 (after --settle) and scored on the other, both ways round; with --window T0 T1 it is fitted on the
 whole record after --settle and scored from T0 to T1 s (the first minutes: what a FIR of a short
 span does once the spectrum is known). The FIR reads the axis's own acceleration (`own`) or all

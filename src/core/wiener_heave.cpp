@@ -196,8 +196,8 @@ void WienerHeave::Design::prepare()
 {
   for (int c = 0; c < kChannels; ++c)
   {
-    position_oldest_first[c].assign(position[c].rbegin(), position[c].rend());
-    velocity_oldest_first[c].assign(velocity[c].rbegin(), velocity[c].rend());
+    std::reverse(position[c].begin(), position[c].end());
+    std::reverse(velocity[c].begin(), velocity[c].end());
     double position_sum = 0.0, velocity_sum = 0.0;
     for (std::size_t k = 0; k < position[c].size(); ++k)
     {
@@ -223,8 +223,8 @@ void WienerHeave::apply(const Design& d, double* x, double* v) const
     const int taps = static_cast<int>(d.position[c].size());
     const int newer = std::min(taps, place + 1);
     const int older = taps - newer;
-    const Values position(d.position_oldest_first[c].data(), taps);
-    const Values velocity(d.velocity_oldest_first[c].data(), taps);
+    const Values position(d.position[c].data(), taps);
+    const Values velocity(d.velocity[c].data(), taps);
     const Values recent(ring + place + 1 - newer, newer);
     const Values wrapped(ring + ring_length_ - older, older);
     *x += position.tail(newer).dot(recent) + position.head(older).dot(wrapped) - d.position_offset[c];

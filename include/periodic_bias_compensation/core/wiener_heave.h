@@ -216,19 +216,18 @@ private:
   };
   struct Design
   {
-    /// FIR taps per input, newest first (a companion's empty: not read).
+    /// FIR taps per input (a companion's empty: not read): newest first as solved, oldest first
+    /// once prepare() has made the design ready for apply().
     std::array<std::vector<double>, kChannels> position;
     std::array<std::vector<double>, kChannels> velocity;
     /// The design window's mean input, taken off first.
     std::array<double, kChannels> mean{};
-    /// As apply() reads them (prepare()): the taps oldest first, and what the mean adds to each
-    /// FIR's output (the mean times the taps' sum).
-    std::array<std::vector<double>, kChannels> position_oldest_first, velocity_oldest_first;
+    /// What the mean adds to each FIR's output (the mean times the taps' sum; prepare()).
     std::array<double, kChannels> position_offset{}, velocity_offset{};
     double error_variance = 0.0;
     double velocity_error_variance = 0.0;
     double wave_variance = 0.0;
-    /// Fills the fields apply() reads from the taps and the mean.
+    /// Turns the taps oldest first and sets the offsets: the last step of a design.
     void prepare();
   };
   /// How a density of the record was estimated, which decides what is taken as wave in it.

@@ -141,9 +141,8 @@ Errors integrateRaw(const std::vector<sim::Sample>& samples, double gravity);
 /// this run, with the truth to fit it: the acceleration (reported orientation, `gravity` off z)
 /// through two moving averages over about kBoundStep (the spectral estimate's low-pass), an FIR of
 /// kBoundSpan over those values kBoundStep apart ending at each sample, plus a constant; the taps
-/// fitted
-/// by least squares to the true wave displacement of the IMU's point (base_link's plus the lever
-/// arm's `R r - r`, `lever_arm` in base_link) on one half of the run and applied to the other
+/// fitted by least squares to the true wave displacement of the IMU's point (base_link's plus the
+/// lever arm's `R r - r`, `lever_arm` in base_link) on one half of the run and applied to the other
 /// (each half predicted by the other's fit), where kBoundSpan of history exists. No causal linear
 /// estimate from that axis alone does better on a stationary sea once it has that history; other
 /// inputs (the attitude, the other axes) could. Scored as the wave motion at base_link from
