@@ -38,6 +38,20 @@ public:
     }
     wake_.notify_one();
   }
+  /// Runs the oldest task not yet started on the calling thread; false when none is queued.
+  bool runOne()
+  {
+    std::function<void()> task;
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      if (tasks_.empty())
+        return false;
+      task = std::move(tasks_.front());
+      tasks_.pop_front();
+    }
+    task();
+    return true;
+  }
 
 private:
   void run()
@@ -66,6 +80,12 @@ private:
   bool stop_ = false;
   std::thread thread_;  ///< last: started once the rest is built
 };
+
+BackgroundThread& designer()
+{
+  static BackgroundThread thread(0);
+  return thread;
+}
 }  // namespace
 
 void planInBackground(std::function<void()> task)
@@ -76,8 +96,12 @@ void planInBackground(std::function<void()> task)
 
 void designInBackground(std::function<void()> task)
 {
-  static BackgroundThread designer(0);
-  designer.post(std::move(task));
+  designer().post(std::move(task));
+}
+
+bool designQueuedHere()
+{
+  return designer().runOne();
 }
 
 }  // namespace periodic_bias_compensation

@@ -11,7 +11,13 @@ namespace periodic_bias_compensation
 void planInBackground(std::function<void()> task);
 
 /// Runs `task` on the core's design thread (one per process, at the caller's priority: a caller
-/// waits for its result at a set sample), in the order given.
+/// waits for its result at a set sample), started in the order given (the oldest not started may
+/// be taken by a waiting caller instead, designQueuedHere()).
 void designInBackground(std::function<void()> task);
+
+/// Runs the oldest design task the design thread has not started on the calling thread, so that
+/// a caller that must wait for a design makes another meanwhile (offline, where samples come
+/// faster than designs, the two threads then design side by side); false when none is queued.
+bool designQueuedHere();
 
 }  // namespace periodic_bias_compensation

@@ -1,10 +1,12 @@
 #include "periodic_bias_compensation/core/wiener_heave.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <complex>
 #include <stdexcept>
 
+#include "background.h"
 #include "periodic_bias_compensation/core/toeplitz.h"
 #include "real_fft.h"
 
@@ -459,6 +461,11 @@ void WienerHeave::startDesign(double noise_density_squared, long delay)
 
 void WienerHeave::finishDesign()
 {
+  // Not made yet: the designs queued meanwhile (other axes', other instances') are made here
+  // while the design thread makes this one.
+  while (pending_.wait_for(std::chrono::seconds(0)) != std::future_status::ready && designQueuedHere())
+  {
+  }
   const Outcome outcome = pending_.get();
   pending_ = {};
   if (!outcome.design)

@@ -363,9 +363,9 @@ public:
   BagCompensator(const Options& options, const Parameters& params)
     : options_(options), params_(params), compensator_(params.core), frame_filter_(params.ros.imu_frame)
   {
-    // Designs in the sample's call: the same outputs as the node's, and no sample waits for a
-    // design a thread would make while the next samples are already read.
-    compensator_.setBackgroundDesigns(false);
+    // Designs stay on the core's design thread, as in the node (the same outputs either way):
+    // here the samples reach a design's due sample before the thread has made it, and the sample
+    // that waits makes the other axes' queued designs meanwhile, so two designs are made at once.
     // Same rule as the node: an existing file is loaded (and must be valid), a missing one
     // means calibrating from the data.
     const std::string& file = params_.ros.calibration_file;

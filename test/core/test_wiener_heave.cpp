@@ -3,11 +3,14 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <future>
 #include <random>
 #include <vector>
 
+#include "../../src/core/background.h"
 #include "periodic_bias_compensation/core/heave_filter.h"
 #include "periodic_bias_compensation/core/wiener_heave.h"
 
@@ -483,6 +486,40 @@ TEST(WienerHeave, BackgroundDesignsChangeNoOutput)
   const long decimation = background.decimation();
   const long made = 2 * decimation + std::lround(WienerHeave::kFirstDesign * rate) - decimation;
   EXPECT_EQ(first_valid + 1, made + std::lround(WienerHeave::kDesignDelay * rate));
+}
+
+// A sample that must take up a design the design thread has not started makes it itself (offline,
+// where samples come faster than designs, the caller and the thread then design side by side):
+// with the thread held by another task, the first design is still taken up when due, with the
+// outputs of designs made in the call.
+TEST(WienerHeave, AWaitingSampleMakesAQueuedDesign)
+{
+  std::promise<void> release;
+  std::shared_future<void> released = release.get_future().share();
+  designInBackground([released] { released.wait(); });
+  const Sea sea(1.0 / 8.0, 2.0, 34);
+  const double rate = 20.0, dt = 1.0 / rate;
+  auto run = std::async(std::launch::async, [&] {
+    WienerHeave background(0.03), calling(0.03);
+    calling.setBackgroundDesigns(false);
+    long differing = 0, valid = 0;
+    for (long i = 0; i < static_cast<long>(60 * rate); ++i)
+    {
+      double x, v, a;
+      sea.at(i * dt, &x, &v, &a);
+      const WienerHeaveOutput b = background.update(a, dt, 1e-4);
+      const WienerHeaveOutput c = calling.update(a, dt, 1e-4);
+      differing += b.valid != c.valid || b.position != c.position || b.velocity != c.velocity;
+      valid += b.valid;
+    }
+    return std::make_pair(differing, valid);
+  });
+  const bool finished = run.wait_for(std::chrono::seconds(60)) == std::future_status::ready;
+  release.set_value();
+  ASSERT_TRUE(finished) << "the sample waited for the held design thread";
+  const auto [differing, valid] = run.get();
+  EXPECT_EQ(differing, 0);
+  EXPECT_GT(valid, static_cast<long>(30 * rate));
 }
 
 // A sample period no IMU has (a glitch, a fuzzed stream) sizes nothing: no output, no throw.

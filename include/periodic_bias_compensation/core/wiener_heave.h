@@ -54,8 +54,9 @@
 // kDesignDelay of data later: on the core's design thread, so that the sample's call does not pay
 // the milliseconds a design costs (or on the calling thread, setBackgroundDesigns(false)). The
 // outputs are the same sample for sample either way: the sample that takes a design up is set by
-// the data, and waits for the design if the thread has not finished it. A gap in the companions
-// is the exception: the design that follows it is made and taken up in the gap's call.
+// the data, and waits for the design if the thread has not finished it, making the designs queued
+// behind it (other axes') meanwhile, so that offline two designs are made at once. A gap in the
+// companions is the exception: the design that follows it is made and taken up in the gap's call.
 //
 // Threading: not thread-safe; the owner serialises calls.
 #pragma once
