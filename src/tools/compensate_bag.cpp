@@ -281,8 +281,9 @@ public:
   }
 
 private:
-  // Batches in flight bound the memory read ahead; a batch amortises the hand-over.
-  static constexpr int kBatches = 4;
+  // Batches in flight (read ahead, in the core, waiting to be written) bound the memory; a batch
+  // amortises the hand-over.
+  static constexpr int kBatches = 8;
   static constexpr std::size_t kBatchMessages = 256;
 
   void run()
@@ -349,6 +350,122 @@ private:
   bool stopping_ = false;
 };
 
+/// A batch the core has been through: the messages read and the outputs of those that produced
+/// one (the message's index in the batch, the core's output).
+struct CoreBatch
+{
+  std::unique_ptr<ReadBatch> read;
+  std::vector<std::pair<std::size_t, CompensatorOutput>> outputs;
+};
+
+/// Builds and writes the outputs of the batches the core has been through, with the messages
+/// copied through, in a thread of its own and in bag order, so that building, serialising and
+/// copying overlap the core's next batch; each batch goes back to the ReadAhead once written. An
+/// exception while writing stops the thread; the next hand() or finish() throws it.
+class WriteBehind
+{
+public:
+  /// Writes one batch (in the writing thread).
+  using WriteOne = std::function<void(const CoreBatch&)>;
+
+  WriteBehind(ReadAhead* reader, WriteOne write_one)
+    : reader_(reader), write_one_(std::move(write_one)), thread_([this] { run(); })
+  {
+  }
+  /// Stops the writing (the caller may stop early, on an error) and waits for the thread.
+  ~WriteBehind()
+  {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      abandoned_ = true;
+    }
+    changed_.notify_all();
+    if (thread_.joinable())
+    {
+      thread_.join();
+    }
+  }
+  WriteBehind(const WriteBehind&) = delete;
+  WriteBehind& operator=(const WriteBehind&) = delete;
+
+  /// Queues a batch to write, waiting while kQueued are queued.
+  void hand(CoreBatch batch)
+  {
+    {
+      std::unique_lock<std::mutex> lock(mutex_);
+      changed_.wait(lock, [this] { return queue_.size() < kQueued || error_; });
+      throwError();
+      queue_.push_back(std::move(batch));
+    }
+    changed_.notify_all();
+  }
+
+  /// Waits until every batch handed is written.
+  void finish()
+  {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      stopping_ = true;
+    }
+    changed_.notify_all();
+    thread_.join();
+    throwError();
+  }
+
+private:
+  static constexpr std::size_t kQueued = 2;
+
+  void run()
+  {
+    for (;;)
+    {
+      CoreBatch batch;
+      {
+        std::unique_lock<std::mutex> lock(mutex_);
+        changed_.wait(lock, [this] { return !queue_.empty() || stopping_ || abandoned_; });
+        if (queue_.empty() || error_ || abandoned_)
+        {
+          return;
+        }
+        batch = std::move(queue_.front());
+        queue_.pop_front();
+      }
+      changed_.notify_all();
+      try
+      {
+        write_one_(batch);
+      }
+      catch (...)
+      {
+        std::lock_guard<std::mutex> lock(mutex_);
+        error_ = std::current_exception();
+        queue_.clear();
+      }
+      changed_.notify_all();
+      reader_->recycle(std::move(batch.read));
+    }
+  }
+
+  /// Under the lock.
+  void throwError()
+  {
+    if (error_)
+    {
+      std::rethrow_exception(error_);
+    }
+  }
+
+  ReadAhead* reader_;
+  WriteOne write_one_;
+  std::mutex mutex_;
+  std::condition_variable changed_;
+  std::deque<CoreBatch> queue_;  ///< oldest first
+  bool stopping_ = false;        ///< finish(): what is queued is still written
+  bool abandoned_ = false;       ///< the destructor: nothing more is written
+  std::exception_ptr error_;
+  std::thread thread_;  ///< last: started once the rest is built
+};
+
 /// IN is truncated or corrupt (`what`: as rosbag says it), after `received` IMU messages.
 std::string corruptInputMessage(const Options& options, const std::string& what, std::uint64_t received)
 {
@@ -361,7 +478,11 @@ class BagCompensator
 {
 public:
   BagCompensator(const Options& options, const Parameters& params)
-    : options_(options), params_(params), compensator_(params.core), frame_filter_(params.ros.imu_frame)
+    : options_(options),
+      params_(params),
+      compensator_(params.core),
+      mode_(compensator_.config().mode),
+      frame_filter_(params.ros.imu_frame)
   {
     // Designs stay on the core's design thread, as in the node (the same outputs either way):
     // here the samples reach a design's due sample before the thread has made it, and the sample
@@ -581,8 +702,9 @@ private:
   }
 
   /// Compensates the messages of `view` (those of `connections` not skipped) in bag order into
-  /// *out, copying ground_truth/* through; they are read ahead by a thread (ReadAhead). Says
-  /// how far it is on stderr every 2 s or so (`begin`, `span`: the bag's).
+  /// *out, copying ground_truth/* through: they are read ahead by a thread (ReadAhead), run
+  /// through the core in this one, and their outputs built and written by another (WriteBehind).
+  /// Says how far it is on stderr every 2 s or so (`begin`, `span`: the bag's).
   void processAll(rosbag::View* view, const std::vector<InputConnection>& connections, const ros::Time& begin,
                   double span, BagWriter* out)
   {
@@ -591,25 +713,44 @@ private:
       readMessage(m, connections, &last, batch);
     });
     std::vector<std::optional<std::uint32_t>> copies(connections.size());  // OUT's connection, for kCopy
+    WriteBehind writer(&reader, [this, &connections, &copies, out](const CoreBatch& done) {
+      auto next_output = done.outputs.begin();
+      for (std::size_t i = 0; i < done.read->messages.size(); ++i)
+      {
+        const ReadBatch::Message& m = done.read->messages[i];
+        if (m.imu)
+        {
+          if (next_output != done.outputs.end() && next_output->first == i)
+          {
+            writeOutputs(next_output->second, *m.imu, m.time, out);
+            ++next_output;
+          }
+          continue;
+        }
+        std::optional<std::uint32_t>& copy = copies[m.connection];
+        if (!copy)
+        {
+          copy = out->addConnection(connections[m.connection].topic, *connections[m.connection].header);
+        }
+        out->write(*copy, m.time, done.read->bytes.data() + m.offset, m.size);
+      }
+    });
     auto last_report = std::chrono::steady_clock::now();
     std::uint64_t messages = 0;
     while (true)
     {
-      std::unique_ptr<ReadBatch> batch = reader.next();
-      for (const ReadBatch::Message& m : batch->messages)
+      CoreBatch batch{ reader.next(), {} };
+      const ReadBatch& read = *batch.read;
+      for (std::size_t i = 0; i < read.messages.size(); ++i)
       {
+        const ReadBatch::Message& m = read.messages[i];
         if (m.imu)
         {
-          process(*m.imu, m.time, out);
-        }
-        else
-        {
-          std::optional<std::uint32_t>& copy = copies[m.connection];
-          if (!copy)
+          CompensatorOutput result;
+          if (process(*m.imu, &result))
           {
-            copy = out->addConnection(connections[m.connection].topic, *connections[m.connection].header);
+            batch.outputs.emplace_back(i, result);
           }
-          out->write(*copy, m.time, batch->bytes.data() + m.offset, m.size);
         }
         if (++messages % 256 == 0)
         {
@@ -621,15 +762,17 @@ private:
           }
         }
       }
-      if (batch->error)
+      if (read.error)
       {
-        std::rethrow_exception(batch->error);
+        std::rethrow_exception(read.error);
       }
-      if (batch->last)
+      const bool last = read.last;
+      writer.hand(std::move(batch));
+      if (last)
       {
+        writer.finish();
         return;
       }
-      reader.recycle(std::move(batch));
     }
   }
 
@@ -729,26 +872,27 @@ private:
     out->write(**connection, time, message);
   }
 
-  void process(const sensor_msgs::Imu& imu, const ros::Time& bag_time, BagWriter* out)
+  /// One IMU message through the core (in the calling thread); true when it produced outputs, in
+  /// *result.
+  bool process(const sensor_msgs::Imu& imu, CompensatorOutput* result)
   {
     ++received_;
     if (!frame_filter_.accept(imu.header.frame_id))
     {
       ++wrong_frame_;
-      return;
+      return false;
     }
     const ImuSample sample = toImuSample(imu, mounting_);
     if (!plausible(sample))
     {
       ++out_of_range_;
-      return;
+      return false;
     }
     if (!options_.tune_gains.empty())
     {
       tuning_samples_.push_back(sample);
     }
-    CompensatorOutput result;
-    const SampleStatus status = compensator_.addSample(sample, &result);
+    const SampleStatus status = compensator_.addSample(sample, result);
     const ForceUnits units = compensator_.forceUnits();
     if (units != units_)
     {
@@ -765,9 +909,17 @@ private:
     }
     if (!producedOutput(status))
     {
-      return;
+      return false;
     }
     frame_filter_.learn(imu.header.frame_id);
+    return true;
+  }
+
+  /// The outputs of one IMU message, built and written to *out (in the writing thread: reads
+  /// only what stays the same while the core runs).
+  void writeOutputs(const CompensatorOutput& result, const sensor_msgs::Imu& imu, const ros::Time& bag_time,
+                    BagWriter* out)
+  {
     // Only the outputs written are built (and must be finite).
     const Outputs& outputs = options_.outputs;
     const OdometryFrames frames{ params_.ros.odom_frame, params_.ros.base_frame };
@@ -778,7 +930,7 @@ private:
     if (outputs.wave)
       wave = toOdometry(result, OdometryKind::kWave, imu, mounting_, frames, imu.header.stamp);
     if (outputs.bias)
-      bias = toBiasState(result, compensator_.config().mode, params_.ros.odom_frame, imu.header.stamp);
+      bias = toBiasState(result, mode_, params_.ros.odom_frame, imu.header.stamp);
     if ((filtered && !allFinite(*filtered)) || (wave && !allFinite(*wave)) || (bias && !allFinite(*bias)))
     {
       ++nonfinite_outputs_;
@@ -795,6 +947,7 @@ private:
   const Options& options_;
   const Parameters& params_;
   Compensator compensator_;
+  const Mode mode_;                        ///< the compensator's, read by the writing thread
   std::optional<Vector3> loaded_bias_;     ///< from calibration_file, if one was loaded
   std::vector<ImuSample> tuning_samples_;  ///< the samples given to the core, kept for --tune-gains
   FrameFilter frame_filter_;
@@ -802,8 +955,8 @@ private:
   std::uint64_t received_ = 0;
   std::uint64_t wrong_frame_ = 0;
   std::uint64_t out_of_range_ = 0;
-  std::uint64_t nonfinite_outputs_ = 0;
-  ForceUnits units_ = ForceUnits::kUnknown;                                               ///< the last units reported
+  std::uint64_t nonfinite_outputs_ = 0;      ///< the writing thread's (processAll)
+  ForceUnits units_ = ForceUnits::kUnknown;  ///< the last units reported
   std::optional<std::uint32_t> filtered_connection_, wave_connection_, bias_connection_;  ///< in OUT
 };
 
