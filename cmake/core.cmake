@@ -24,7 +24,8 @@ add_library(${PROJECT_NAME}_core
   src/core/drift_observer.cpp
   src/core/frequency_drift.cpp
   src/core/periodic_wave.cpp
-  src/core/raw_integrator.cpp)
+  src/core/raw_integrator.cpp
+  src/core/zeroed_buffer.cpp)
 target_include_directories(${PROJECT_NAME}_core PUBLIC include)
 # FrequencyTracker plans its transform on a thread of its own.
 find_package(Threads REQUIRED)

@@ -489,11 +489,16 @@ private:
       axis.paper.setCapacity(table);
       axis.wave.setCapacity(table);
     }
-    // windowOffset plans the calibration window's transform on the sample that ends the window:
-    // the sizes that window can have are planned now, in the background.
     if (!calibrated_)
     {
       const int samples = static_cast<int>(std::lround(config_.calibration_duration * rate));
+      // The window, then the samples that arrive while it is replayed, in one buffer (the
+      // replay's, finishCalibration) allocated now, a few per cent over for stamp jitter: growing
+      // it would copy megabytes in one sample's call at a high rate.
+      const std::size_t expected = static_cast<std::size_t>(samples) + samples / 50 + 16;
+      calibration_.reserve(expected + expected / (kReplayPerSample - 1) + kReplayPerSample);
+      // windowOffset plans the calibration window's transform on the sample that ends the
+      // window: the sizes that window can have are planned now, in the background.
       planInBackground([samples] {
         std::vector<int> sizes;
         for (int extra = -2; extra <= 3; ++extra)

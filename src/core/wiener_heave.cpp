@@ -106,7 +106,7 @@ WienerHeaveOutput WienerHeave::step(double a, double period, double noise_densit
     {
       channels_[c].first.assign(decimation_, 0.0);
       channels_[c].second.assign(decimation_, 0.0);
-      channels_[c].history.assign(static_cast<size_t>(ring_length_) * decimation_, 0.0);
+      channels_[c].history = ZeroedBuffer(static_cast<size_t>(ring_length_) * decimation_);
     }
   }
   std::array<double, kChannels> input{ a, 0.0, 0.0 };

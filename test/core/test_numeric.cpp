@@ -1,11 +1,17 @@
 // The shared numeric helpers: angle wrapping, the median and the in-place upper median, the
-// polynomial sine and cosine.
+// polynomial sine and cosine; the zeroed buffer.
 #include <gtest/gtest.h>
+#include <sys/mman.h>
+#include <unistd.h>
 
 #include <cmath>
+#include <cstdint>
+#include <tuple>
+#include <utility>
 #include <vector>
 
 #include "periodic_bias_compensation/common/numeric.h"
+#include "periodic_bias_compensation/core/zeroed_buffer.h"
 
 namespace pbc = periodic_bias_compensation;
 
@@ -77,4 +83,68 @@ TEST(Numeric, SinCosOfAnyAngleIsWithinItsBound)
     EXPECT_NEAR(s, static_cast<double>(std::sin(static_cast<long double>(x))), bound) << x;
     EXPECT_NEAR(c, static_cast<double>(std::cos(static_cast<long double>(x))), bound) << x;
   }
+}
+
+namespace
+{
+/// Pages of `buffer` in memory (mincore), of those it spans.
+std::pair<int, int> residentPages(const pbc::ZeroedBuffer& buffer)
+{
+  const std::size_t page = static_cast<std::size_t>(sysconf(_SC_PAGESIZE));
+  const auto begin = reinterpret_cast<std::uintptr_t>(buffer.data()) / page * page;
+  const auto end = reinterpret_cast<std::uintptr_t>(buffer.data() + buffer.size());
+  std::vector<unsigned char> in_core((end - begin + page - 1) / page);
+  if (mincore(reinterpret_cast<void*>(begin), end - begin, in_core.data()) != 0)
+    return { -1, -1 };
+  int resident = 0;
+  for (unsigned char c : in_core)
+    resident += c & 1;
+  return { resident, static_cast<int>(in_core.size()) };
+}
+}  // namespace
+
+TEST(ZeroedBuffer, HoldsZerosCopiesAndMoves)
+{
+  for (std::size_t n : { std::size_t{ 0 }, std::size_t{ 7 }, std::size_t{ 1 } << 20 })
+  {
+    pbc::ZeroedBuffer buffer(n);
+    ASSERT_EQ(buffer.size(), n);
+    EXPECT_EQ(buffer.empty(), n == 0);
+    bool zero = true;
+    for (std::size_t i = 0; i < n; ++i)
+      zero = zero && buffer[i] == 0.0;
+    EXPECT_TRUE(zero) << n;
+    if (n == 0)
+      continue;
+    buffer[n - 1] = 2.5;
+    pbc::ZeroedBuffer copy(buffer);
+    copy[0] = -1.0;
+    EXPECT_EQ(copy[n - 1], 2.5);
+    EXPECT_EQ(buffer[0], 0.0) << "the copy shares no memory";
+    pbc::ZeroedBuffer moved(std::move(copy));
+    EXPECT_TRUE(copy.empty());
+    EXPECT_EQ(moved[0], -1.0);
+    buffer = moved;
+    EXPECT_EQ(buffer[0], -1.0);
+    buffer = pbc::ZeroedBuffer(3);
+    EXPECT_EQ(buffer.size(), 3u);
+    EXPECT_EQ(buffer[2], 0.0);
+  }
+}
+
+// Sizing a buffer for a high sample rate costs no time in the call that sizes it: a large
+// buffer's pages are not in memory until written, and then only those written.
+TEST(ZeroedBuffer, ALargeBuffersPagesComeInAsTheyAreWritten)
+{
+  pbc::ZeroedBuffer buffer(std::size_t{ 4 } << 20);  // 32 MB, as at 2.8 kHz
+  auto [resident, pages] = residentPages(buffer);
+  ASSERT_GT(pages, 1000);
+  EXPECT_LE(resident, 2) << "of " << pages << " pages";
+  const double sum = buffer[0] + buffer[buffer.size() / 2] + buffer[buffer.size() - 1];
+  EXPECT_EQ(sum, 0.0);
+  for (std::size_t i = 0; i < buffer.size() / 4; ++i)
+    buffer[i] = 1.0;
+  std::tie(resident, pages) = residentPages(buffer);
+  EXPECT_GE(resident, pages / 4 - 1);
+  EXPECT_LE(resident, pages / 4 + 4);
 }

@@ -67,6 +67,12 @@ public:
     taken.swap(samples_);
     return taken;
   }
+  /// Room for n samples, so that adding them moves none (a window of seconds at a high rate is
+  /// megabytes to copy in one sample's call).
+  void reserve(std::size_t n)
+  {
+    samples_.reserve(n);
+  }
   /// Adds a sample; whether the window now spans `duration` [s] from its first sample.
   bool add(const ImuSample& sample, double dt, double duration);
 

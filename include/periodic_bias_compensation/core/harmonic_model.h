@@ -14,6 +14,8 @@
 #include <deque>
 #include <vector>
 
+#include "periodic_bias_compensation/core/zeroed_buffer.h"
+
 namespace periodic_bias_compensation
 {
 /// Most harmonics of the dominant frequency the model takes.
@@ -24,7 +26,7 @@ constexpr int kMaxHarmonics = 4;
 class SignalHistory
 {
 public:
-  explicit SignalHistory(int capacity = 1) : values_(std::max(capacity, 1), 0.0)
+  explicit SignalHistory(int capacity = 1) : values_(static_cast<std::size_t>(std::max(capacity, 1)))
   {
   }
 
@@ -89,7 +91,7 @@ private:
       pushExtremes(i, values_[i % values_.size()]);
   }
 
-  std::vector<double> values_;
+  ZeroedBuffer values_;  ///< sized for the rate: its pages are faulted in as it fills
   long index_ = 0;
   int window_ = 0;
   std::deque<long> max_, min_;

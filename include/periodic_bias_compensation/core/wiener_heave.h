@@ -69,6 +69,7 @@
 #include <vector>
 
 #include "periodic_bias_compensation/core/unshared_transform.h"
+#include "periodic_bias_compensation/core/zeroed_buffer.h"
 
 namespace periodic_bias_compensation
 {
@@ -211,7 +212,7 @@ private:
     double first_sum = 0.0, second_sum = 0.0;
     // Low-passed values at the full rate in decimation_ rings of ring_length_ (one per sample
     // phase modulo D, so that the FIR reads consecutive values); the newest at newest_.
-    std::vector<double> history;
+    ZeroedBuffer history;
     // Design-rate values, oldest first, at most kDesignWindow.
     std::vector<double> decimated;
   };
