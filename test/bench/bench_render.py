@@ -117,6 +117,7 @@ def values(name, results, plots_dir):
         v.update(repetitions=s['repetitions'], table=core_table(s['rows']))
     elif name == 'core-latency':
         v.update(seed=s['seed'], duration=s['duration'], speed='%g' % s['speed'],
+                 fast_duration=s.get('fast_duration', '-'),
                  table=bench_report.core_latency_markdown(s['runs']).strip('\n'))
     elif name == 'simulator-speed':
         v.update(hours='%g' % (s['duration'] / 3600), samples='%g' % (s['duration'] * 100 / 1e6),

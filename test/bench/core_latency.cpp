@@ -3,9 +3,10 @@
 // What the nodelet's callback pays for the core, without the transport. Run by scripts/bench.py,
 // not a test.
 //
-//   core_latency --scenario FILE.yaml --duration S [--speed X] [--designs background|calling]
+//   core_latency --scenario FILE.yaml --duration S [--rate HZ] [--speed X]
+//                [--designs background|calling]
 //
-// The scenario (its own seed) is simulated for S seconds first; then sample k is given at
+// The scenario (its own seed, at its own rate or HZ) is simulated for S seconds first; then sample k is given at
 // start + (t_k - t_0) / X of the steady clock (X = 1: the IMU's own pace) and its call timed.
 // Output: one line of key=value pairs on stdout (call times in us; max_at_s is the data time of
 // the slowest call from the first sample, `slowest` the five slowest as data time:us).
@@ -33,12 +34,14 @@ struct Options
 {
   std::string scenario;
   double duration = 0.0;
+  double rate = 0.0;  ///< 0: the scenario's
   double speed = 1.0;
   std::string designs = "background";
 };
 
 const char* kUsage =
-    "usage: core_latency --scenario FILE.yaml --duration S [--speed X] [--designs background|calling]\n";
+    "usage: core_latency --scenario FILE.yaml --duration S [--rate HZ] [--speed X]\n"
+    "                    [--designs background|calling]\n";
 
 std::optional<Options> parseOptions(int argc, char** argv)
 {
@@ -46,12 +49,15 @@ std::optional<Options> parseOptions(int argc, char** argv)
   pbc::CommandLine cli(kUsage);
   cli.text("--scenario", &o.scenario)
       .number("--duration", &o.duration)
+      .number("--rate", &o.rate)
       .number("--speed", &o.speed)
       .text("--designs", &o.designs);
   if (!cli.parse(argc, argv))
     return std::nullopt;
   if (o.scenario.empty() || !(o.duration > 0.0) || !(o.speed > 0.0))
     throw pbc::UsageError("--scenario, --duration > 0 and --speed > 0 are required");
+  if (!(o.rate >= 0.0 && o.rate <= 10000.0))
+    throw pbc::UsageError("--rate is 0 (the scenario's) to 10000 Hz");
   if (o.designs != "background" && o.designs != "calling")
     throw pbc::UsageError("--designs is background or calling");
   return o;
@@ -77,6 +83,8 @@ int main(int argc, char** argv)
   {
     sim::Scenario scenario = sim::loadScenario(options.scenario);
     scenario.duration = options.duration;
+    if (options.rate > 0.0)
+      scenario.rate = options.rate;
     sim::Simulator simulator(scenario, scenario.seed);
     std::vector<pbc::ImuSample> samples;
     sim::Sample s;
@@ -127,10 +135,10 @@ int main(int argc, char** argv)
       slowest_calls += entry;
     }
     std::printf(
-        "designs=%s samples=%zu speed=%g mean_us=%.2f p50_us=%.2f p99_us=%.2f p999_us=%.1f max_us=%.1f "
+        "designs=%s rate=%g samples=%zu speed=%g mean_us=%.2f p50_us=%.2f p99_us=%.2f p999_us=%.1f max_us=%.1f "
         "max_at_s=%.2f over_200us=%ld over_1ms=%ld slowest=%s checksum=%.17g\n",
-        options.designs.c_str(), samples.size(), options.speed, total / samples.size(), quantile(0.5), quantile(0.99),
-        quantile(0.999), call_us[order.front()], samples[order.front()].t - t0, over_200, over_1000,
+        options.designs.c_str(), scenario.rate, samples.size(), options.speed, total / samples.size(), quantile(0.5),
+        quantile(0.99), quantile(0.999), call_us[order.front()], samples[order.front()].t - t0, over_200, over_1000,
         slowest_calls.c_str(), checksum);
     return 0;
   }

@@ -146,15 +146,25 @@ class RenderTest(unittest.TestCase):
 
     def test_core_latency(self):
         self.assertIn('`swell_and_wind_sea` (seed 7), 300 s of 100 Hz data given at 4 times its own pace', self.md)
-        self.assertIn('| background | 1 | 12.6 | 10.7 | 53 | 140 | 542 | 5 | 0 | 0.16: 542, 86.12: 392, 10.00: 309, '
-                      '45.99: 240, 35.40: 202 |', self.md)
-        self.assertIn('| calling | 1 | 14.9 | 12.3 | 59 | 443 | 1942 | 25 | 3 |', self.md)
-        self.assertIn('Outputs of every run the same (sum of the positions over the run): **yes**.', self.md)
-        self.assertIn('Calls over 1 ms, background / calling: **0 / 3**; calls over 200 us: **5 / 25**.', self.md)
+        self.assertIn('| 100 | background | 1 | 12.6 | 10.7 | 53 | 140 | 542 | 5 | 0 | 0.16: 542, 86.12: 392, '
+                      '10.00: 309, 45.99: 240, 35.40: 202 |', self.md)
+        self.assertIn('| 100 | calling | 1 | 14.9 | 12.3 | 59 | 443 | 1942 | 25 | 3 |', self.md)
+        self.assertIn('Outputs of every run at one rate the same (sum of the positions over the run): **yes**.',
+                      self.md)
+        self.assertIn('Calls over 1 ms at 100 Hz, background / calling: **0 / 3**; calls over 200 us: **5 / 25**.',
+                      self.md)
         # Runs whose outputs differ say so.
         changed = copy.deepcopy(FIXTURE)
         changed['sections']['core-latency']['runs'][1]['checksum'] = '-19.8492'
         self.assertIn('(sum of the positions over the run): **no**.', render(changed))
+        # A run at another rate has a row of its own, other outputs, and stays out of the 100 Hz sums.
+        fast = copy.deepcopy(FIXTURE)
+        run = dict(fast['sections']['core-latency']['runs'][0], rate='1000', checksum='3.5', over_1ms='7')
+        fast['sections']['core-latency']['runs'].append(run)
+        md = render(fast)
+        self.assertIn('| 1000 | background | 1 | 12.6 |', md)
+        self.assertIn('**yes**.', md.split('Outputs of every run at one rate')[1].split('\n')[0])
+        self.assertIn('Calls over 1 ms at 100 Hz, background / calling: **0 / 3**', md)
 
     def test_prose_is_computed(self):
         prose = self.md.split('### Where the baselines win or lose')[1].split('\n## ')[0]
