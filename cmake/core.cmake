@@ -1,31 +1,6 @@
 # Estimation core: no ROS include, its own library, tested without a master.
-add_library(${PROJECT_NAME}_core
-  src/core/compensator.cpp
-  src/core/parameter_table.cpp
-  src/core/frequency_tracker.cpp
-  src/core/calibration_file.cpp
-  src/core/gain_tuning.cpp
-  src/core/gyro_attitude.cpp
-  src/core/heave_filter.cpp
-  src/core/time_base.cpp
-  src/core/real_fft.cpp
-  src/core/background.cpp
-  src/core/wiener_heave.cpp
-  src/core/toeplitz.cpp
-  src/core/noise_floor.cpp
-  src/core/lever_arm.cpp
-  src/core/broadband_wave.cpp
-  src/core/wave_consistency.cpp
-  src/core/harmonic_model.cpp
-  src/core/paper_loop.cpp
-  src/core/leveller.cpp
-  src/core/turn_detector.cpp
-  src/core/calibration_window.cpp
-  src/core/drift_observer.cpp
-  src/core/frequency_drift.cpp
-  src/core/periodic_wave.cpp
-  src/core/raw_integrator.cpp
-  src/core/zeroed_buffer.cpp)
+include(${CMAKE_CURRENT_LIST_DIR}/core_sources.cmake)
+add_library(${PROJECT_NAME}_core ${PBC_CORE_SOURCES})
 target_include_directories(${PROJECT_NAME}_core PUBLIC include)
 # FrequencyTracker plans its transform on a thread of its own.
 find_package(Threads REQUIRED)

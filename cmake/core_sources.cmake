@@ -1,0 +1,29 @@
+# The estimation core's sources, relative to the repository: the core library (cmake/core.cmake)
+# and the fuzz build (test/fuzz/CMakeLists.txt) compile this one list.
+set(PBC_CORE_SOURCES
+  src/core/compensator.cpp
+  src/core/parameter_table.cpp
+  src/core/frequency_tracker.cpp
+  src/core/calibration_file.cpp
+  src/core/gain_tuning.cpp
+  src/core/gyro_attitude.cpp
+  src/core/heave_filter.cpp
+  src/core/time_base.cpp
+  src/core/real_fft.cpp
+  src/core/background.cpp
+  src/core/wiener_heave.cpp
+  src/core/toeplitz.cpp
+  src/core/noise_floor.cpp
+  src/core/lever_arm.cpp
+  src/core/broadband_wave.cpp
+  src/core/wave_consistency.cpp
+  src/core/harmonic_model.cpp
+  src/core/paper_loop.cpp
+  src/core/leveller.cpp
+  src/core/turn_detector.cpp
+  src/core/calibration_window.cpp
+  src/core/drift_observer.cpp
+  src/core/frequency_drift.cpp
+  src/core/periodic_wave.cpp
+  src/core/raw_integrator.cpp
+  src/core/zeroed_buffer.cpp)
