@@ -496,7 +496,7 @@ private:
       // replay's, finishCalibration) allocated now, a few per cent over for stamp jitter: growing
       // it would copy megabytes in one sample's call at a high rate.
       const std::size_t expected = static_cast<std::size_t>(samples) + samples / 50 + 16;
-      calibration_.reserve(expected + expected / (kReplayPerSample - 1) + kReplayPerSample);
+      calibration_.reserve(replayCapacity(expected));
       // windowOffset plans the calibration window's transform on the sample that ends the
       // window: the sizes that window can have are planned now, in the background.
       planInBackground([samples] {
@@ -586,9 +586,16 @@ private:
       }
     replay_ = calibration_.take();
     window_end_ = replay_.size();
-    replay_.reserve(window_end_ + window_end_ / (kReplayPerSample - 1) + kReplayPerSample);
+    replay_.reserve(replayCapacity(window_end_));
     replayed_ = 0;
     continueReplay(out);
+  }
+
+  /// The replay's length for a window of `window` samples: those and the samples that arrive
+  /// while it catches up.
+  static std::size_t replayCapacity(std::size_t window)
+  {
+    return window + window / (kReplayPerSample - 1) + kReplayPerSample;
   }
 
   /// The next kReplayPerSample samples of the replay: the window's, then those that arrived
