@@ -72,6 +72,11 @@ BroadbandWaveOutput BroadbandWave::update(const BroadbandWaveInput& in)
   if (dt > 0.0)
     spectral_share_ +=
         (1.0 - std::exp(-dt / WienerHeave::kDesignFade)) * ((spectral.valid ? 1.0 : 0.0) - spectral_share_);
+  // The fade keeps the published output from stepping; where the blend publishes (next to) none of
+  // the broadband estimate, a design replaces the fixed filter at once: the fixed filter's start
+  // (up to a metre off in the first half minute on a sea) would otherwise ride into it.
+  if (spectral.valid && weight_ < kMinWeight)
+    spectral_share_ = 1.0;
   // The vertical axis measures what the harmonic model misses through four high-passes until the
   // first design (designed() stays true until reset()), every axis through two after it.
   const bool four_passes = vertical_ && !spectral_.designed();
@@ -201,12 +206,15 @@ BroadbandWaveOutput BroadbandWave::update(const BroadbandWaveInput& in)
   if ((holds_sea || output_holds_sea) && spectral.valid && in.locked && in.frequency > 0.0 && peak > 0.0 &&
       std::abs(in.frequency - peak) > kOffPeak * peak)
     target = 1.0;
-  // Without a lock the harmonic model's output is none: a design that holds a sea, with an output
-  // kSeaOverError times the broadband error, is then the whole output. Not on a horizontal axis's
-  // first minute: a short record of a hand's or a rig's motion reads as a sea there (the x-io
-  // recordings, docs/benchmarks.md), and a broad sea holds a lock away from its displacement's
-  // peak, which opens the share above.
-  if (!in.locked && holds_sea && output_over_error && miss_measured)
+  // Without a lock the harmonic model's output is none: a design that holds a sea is then the
+  // whole output, vertically from its first sample (the output's mean square since the start holds
+  // the fixed filter's, and would close the share again for seconds), horizontally once that output
+  // is kSeaOverError times the broadband error and not in the axis's first minute: a short record
+  // of a hand's or a rig's motion reads as a sea there (the x-io recordings, docs/benchmarks.md),
+  // and a broad sea holds a lock away from its displacement's peak, which opens the share above.
+  // Nothing is published to fade from: the share comes in with kBlockedFade.
+  const bool unlocked_sea = !in.locked && holds_sea && (vertical_ || (output_over_error && miss_measured));
+  if (unlocked_sea)
     target = 1.0;
   // What the harmonic model's displacement misses: with a lock, what the residual or the difference
   // says; without one its output is none, so the whole wave. Velocity in proportion, at the
@@ -224,7 +232,7 @@ BroadbandWaveOutput BroadbandWave::update(const BroadbandWaveInput& in)
   if (blocked)
     returning_ = true;
   if (dt > 0.0)
-    weight_ += (1.0 - std::exp(-dt / (returning_ ? kBlockedFade : kWeightTime))) * (target - weight_);
+    weight_ += (1.0 - std::exp(-dt / (returning_ || unlocked_sea ? kBlockedFade : kWeightTime))) * (target - weight_);
   if (!blocked && std::abs(target - weight_) < kReturned)
     returning_ = false;
   out.weight = weight_;

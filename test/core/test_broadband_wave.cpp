@@ -152,6 +152,34 @@ TEST(BroadbandWave, WithoutALockTheSpectralEstimateTakesTheSea)
   EXPECT_LT(std::sqrt(error2 / truth2), 0.3);
 }
 
+// Without a lock nothing is published until the first design; from then on the design is the
+// output within a second, not faded in over seconds from nothing and from the fixed filter's
+// start (which rings for minutes after a start in the waves). Over its first ten seconds the
+// published displacement is pooled over seeds.
+TEST(BroadbandWave, TheFirstDesignIsPublishedAtOnceWithoutALock)
+{
+  double error2 = 0.0, truth2 = 0.0;
+  for (unsigned seed = 5; seed < 13; ++seed)
+  {
+    const BroadSea sea(0.5, seed);
+    BroadbandWave wave(true);
+    std::mt19937_64 rng(seed);
+    double t = 0.0;
+    feed(&wave, &sea, WienerHeave::kFirstDesign + WienerHeave::kDesignDelay, true, &t, &rng, nullptr, false);
+    for (int k = 0; k < 10 * static_cast<int>(kRate); ++k)
+    {
+      const BroadbandWaveOutput o = feed(&wave, &sea, 1.0 / kRate, true, &t, &rng, nullptr, false);
+      if (k == static_cast<int>(kRate))
+        EXPECT_GT(o.weight, 0.9) << "one second after the design, seed " << seed;
+      double x, a;
+      sea.at(t - 1.0 / kRate, &x, &a);
+      error2 += std::pow(o.weight * o.estimate.position - x, 2);
+      truth2 += x * x;
+    }
+  }
+  EXPECT_LT(std::sqrt(error2 / truth2), 0.42);
+}
+
 // Horizontally: no share before the spectral estimate exists (the fixed filter never stands in),
 // a share once it does, and out within a second of being blocked (a turn).
 TEST(BroadbandWave, HorizontalOnlySpectralAndBlockable)

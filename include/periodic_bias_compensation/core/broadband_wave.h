@@ -35,10 +35,11 @@
 //    miss read low (the residual's high-passes take the low frequencies, and the two
 //    displacements' errors are not independent);
 //  - without a lock (the harmonic model's output is then none), the whole of it once the spectral
-//    design holds a sea and the broadband output's mean square is kSeaOverError times its error.
+//    design holds a sea, taken up with kBlockedFade; horizontally only once the broadband output's
+//    mean square is also kSeaOverError times its error.
 // While the ship turns, the spectrum is measured anew (WienerHeave::restartRecord); the vertical
 // axis crosses over to the fixed filter with WienerHeave::kDesignFade and back once the new record
-// gives a design. A horizontal axis takes the spectral estimate only, and none while the owner says it may not
+// gives a design (at once where the blend publishes less than kMinWeight of it). A horizontal axis takes the spectral estimate only, and none while the owner says it may not
 // (a ship turning, no attitude): its share then fades out with kBlockedFade, and returns as fast.
 //
 // Threading: not thread-safe; the owner serialises calls.
