@@ -122,13 +122,14 @@ BagWriter::BagWriter(const std::string& path, Compression compression, bool back
   writeFileHeader(0);
   if (background)
   {
-    thread_ = std::thread([this] { runThread(); });
+    thread_ = std::make_unique<WorkThread<Chunk>>(
+        1, [this](Chunk& chunk) { storeChunk(&chunk); }, true);
   }
 }
 
 BagWriter::~BagWriter()
 {
-  stopThread();
+  thread_.reset();  // what waits is dropped: the file is incomplete without close() anyway
   if (file_ != nullptr)
   {
     std::fclose(file_);
@@ -232,76 +233,21 @@ void BagWriter::finishChunk()
   {
     return;
   }
-  if (!thread_.joinable())
+  if (!thread_)
   {
     storeChunk(&chunk_);
     return;
   }
-  std::unique_lock<std::mutex> lock(mutex_);
-  changed_.wait(lock, [this] { return pending_.size() < 2 || error_; });
-  if (error_)
+  thread_->hand(std::move(chunk_));
+  if (std::optional<Chunk> stored = thread_->takeDone())
   {
-    std::rethrow_exception(error_);
+    chunk_ = std::move(*stored);
   }
-  pending_.push_back(std::move(chunk_));
-  if (free_.empty())
+  else
   {
     chunk_ = Chunk();
     chunk_.data.reserve(chunk_threshold_ + 64 * 1024);
   }
-  else
-  {
-    chunk_ = std::move(free_.back());
-    free_.pop_back();
-  }
-  changed_.notify_all();
-}
-
-void BagWriter::runThread()
-{
-  std::unique_lock<std::mutex> lock(mutex_);
-  while (true)
-  {
-    changed_.wait(lock, [this] { return !pending_.empty() || stopping_; });
-    if (pending_.empty())
-    {
-      return;
-    }
-    Chunk chunk = std::move(pending_.front());
-    lock.unlock();
-    std::exception_ptr error;
-    try
-    {
-      storeChunk(&chunk);
-    }
-    catch (...)
-    {
-      error = std::current_exception();
-    }
-    lock.lock();
-    pending_.pop_front();
-    free_.push_back(std::move(chunk));
-    changed_.notify_all();
-    if (error)
-    {
-      error_ = error;
-      return;
-    }
-  }
-}
-
-void BagWriter::stopThread()
-{
-  if (!thread_.joinable())
-  {
-    return;
-  }
-  {
-    std::lock_guard<std::mutex> lock(mutex_);
-    stopping_ = true;
-  }
-  changed_.notify_all();
-  thread_.join();
 }
 
 void BagWriter::storeChunk(Chunk* chunk)
@@ -400,10 +346,9 @@ void BagWriter::close()
     return;
   }
   finishChunk();
-  stopThread();
-  if (error_)
+  if (thread_)
   {
-    std::rethrow_exception(error_);
+    thread_->finish();
   }
   const std::uint64_t index_position = position_;
   std::vector<std::uint8_t> records;

@@ -45,6 +45,7 @@
 #include <tf2/buffer_core.h>
 #include <tf2_msgs/TFMessage.h>
 
+#include "periodic_bias_compensation/common/work_thread.h"
 #include "periodic_bias_compensation/core/calibration_file.h"
 #include "periodic_bias_compensation/core/compensator.h"
 #include "periodic_bias_compensation/core/gain_tuning.h"
@@ -358,114 +359,6 @@ struct CoreBatch
   std::vector<std::pair<std::size_t, CompensatorOutput>> outputs;
 };
 
-/// Builds and writes the outputs of the batches the core has been through, with the messages
-/// copied through, in a thread of its own and in bag order, so that building, serialising and
-/// copying overlap the core's next batch; each batch goes back to the ReadAhead once written. An
-/// exception while writing stops the thread; the next hand() or finish() throws it.
-class WriteBehind
-{
-public:
-  /// Writes one batch (in the writing thread).
-  using WriteOne = std::function<void(const CoreBatch&)>;
-
-  WriteBehind(ReadAhead* reader, WriteOne write_one)
-    : reader_(reader), write_one_(std::move(write_one)), thread_([this] { run(); })
-  {
-  }
-  /// Stops the writing (the caller may stop early, on an error) and waits for the thread.
-  ~WriteBehind()
-  {
-    {
-      std::lock_guard<std::mutex> lock(mutex_);
-      abandoned_ = true;
-    }
-    changed_.notify_all();
-    if (thread_.joinable())
-    {
-      thread_.join();
-    }
-  }
-  WriteBehind(const WriteBehind&) = delete;
-  WriteBehind& operator=(const WriteBehind&) = delete;
-
-  /// Queues a batch to write, waiting while kQueued are queued.
-  void hand(CoreBatch batch)
-  {
-    {
-      std::unique_lock<std::mutex> lock(mutex_);
-      changed_.wait(lock, [this] { return queue_.size() < kQueued || error_; });
-      throwError();
-      queue_.push_back(std::move(batch));
-    }
-    changed_.notify_all();
-  }
-
-  /// Waits until every batch handed is written.
-  void finish()
-  {
-    {
-      std::lock_guard<std::mutex> lock(mutex_);
-      stopping_ = true;
-    }
-    changed_.notify_all();
-    thread_.join();
-    throwError();
-  }
-
-private:
-  static constexpr std::size_t kQueued = 2;
-
-  void run()
-  {
-    for (;;)
-    {
-      CoreBatch batch;
-      {
-        std::unique_lock<std::mutex> lock(mutex_);
-        changed_.wait(lock, [this] { return !queue_.empty() || stopping_ || abandoned_; });
-        if (queue_.empty() || error_ || abandoned_)
-        {
-          return;
-        }
-        batch = std::move(queue_.front());
-        queue_.pop_front();
-      }
-      changed_.notify_all();
-      try
-      {
-        write_one_(batch);
-      }
-      catch (...)
-      {
-        std::lock_guard<std::mutex> lock(mutex_);
-        error_ = std::current_exception();
-        queue_.clear();
-      }
-      changed_.notify_all();
-      reader_->recycle(std::move(batch.read));
-    }
-  }
-
-  /// Under the lock.
-  void throwError()
-  {
-    if (error_)
-    {
-      std::rethrow_exception(error_);
-    }
-  }
-
-  ReadAhead* reader_;
-  WriteOne write_one_;
-  std::mutex mutex_;
-  std::condition_variable changed_;
-  std::deque<CoreBatch> queue_;  ///< oldest first
-  bool stopping_ = false;        ///< finish(): what is queued is still written
-  bool abandoned_ = false;       ///< the destructor: nothing more is written
-  std::exception_ptr error_;
-  std::thread thread_;  ///< last: started once the rest is built
-};
-
 /// IN is truncated or corrupt (`what`: as rosbag says it), after `received` IMU messages.
 std::string corruptInputMessage(const Options& options, const std::string& what, std::uint64_t received)
 {
@@ -703,7 +596,7 @@ private:
 
   /// Compensates the messages of `view` (those of `connections` not skipped) in bag order into
   /// *out, copying ground_truth/* through: they are read ahead by a thread (ReadAhead), run
-  /// through the core in this one, and their outputs built and written by another (WriteBehind).
+  /// through the core in this one, and their outputs built and written by another (WorkThread).
   /// Says how far it is on stderr every 2 s or so (`begin`, `span`: the bag's).
   void processAll(rosbag::View* view, const std::vector<InputConnection>& connections, const ros::Time& begin,
                   double span, BagWriter* out)
@@ -713,7 +606,11 @@ private:
       readMessage(m, connections, &last, batch);
     });
     std::vector<std::optional<std::uint32_t>> copies(connections.size());  // OUT's connection, for kCopy
-    WriteBehind writer(&reader, [this, &connections, &copies, out](const CoreBatch& done) {
+    // The outputs of the batches the core has been through are built and written, with the
+    // messages copied through, in a thread of their own and in bag order, so that building,
+    // serialising and copying overlap the core's next batch; each batch goes back to the reader
+    // once written. Two wait at most.
+    WorkThread<CoreBatch> writer(2, [this, &connections, &copies, out, &reader](CoreBatch& done) {
       auto next_output = done.outputs.begin();
       for (std::size_t i = 0; i < done.read->messages.size(); ++i)
       {
@@ -734,6 +631,7 @@ private:
         }
         out->write(*copy, m.time, done.read->bytes.data() + m.offset, m.size);
       }
+      reader.recycle(std::move(done.read));
     });
     auto last_report = std::chrono::steady_clock::now();
     std::uint64_t messages = 0;

@@ -170,7 +170,9 @@ TEST(BroadbandWave, TheFirstDesignIsPublishedAtOnceWithoutALock)
     {
       const BroadbandWaveOutput o = feed(&wave, &sea, 1.0 / kRate, true, &t, &rng, nullptr, false);
       if (k == static_cast<int>(kRate))
+      {
         EXPECT_GT(o.weight, 0.9) << "one second after the design, seed " << seed;
+      }
       double x, a;
       sea.at(t - 1.0 / kRate, &x, &a);
       error2 += std::pow(o.weight * o.estimate.position - x, 2);

@@ -14,21 +14,19 @@
 // Errors (cannot open, write or compress) throw std::runtime_error naming the file.
 #pragma once
 
-#include <condition_variable>
 #include <cstdint>
 #include <cstdio>
-#include <deque>
-#include <exception>
 #include <map>
-#include <mutex>
+#include <memory>
 #include <string>
-#include <thread>
 #include <vector>
 
 #include <ros/message_traits.h>
 #include <ros/serialization.h>
 #include <ros/time.h>
 #include <rosbag/message_instance.h>
+
+#include "periodic_bias_compensation/common/work_thread.h"
 
 namespace periodic_bias_compensation
 {
@@ -123,8 +121,6 @@ private:
   void finishChunk();
   /// Compresses and writes a chunk and its index records (in the thread, if there is one).
   void storeChunk(Chunk* chunk);
-  void runThread();
-  void stopThread();
   void writeFileHeader(std::uint64_t index_position);
   void writeBytes(const void* data, std::size_t size);
 
@@ -139,13 +135,8 @@ private:
   std::vector<char> compressed_;
   std::vector<ChunkInfo> chunks_;
   std::vector<std::uint8_t> record_;  ///< scratch for records
-  // The thread and what it shares.
-  std::thread thread_;
-  std::mutex mutex_;
-  std::condition_variable changed_;
-  std::deque<Chunk> pending_;  ///< full chunks, oldest first
-  std::vector<Chunk> free_;    ///< stored chunks, their buffers reused
-  bool stopping_ = false;
-  std::exception_ptr error_;
+  /// With `background`: stores the full chunks (one in work, at most one waiting) and keeps them,
+  /// their buffers reused.
+  std::unique_ptr<WorkThread<Chunk>> thread_;
 };
 }  // namespace periodic_bias_compensation
