@@ -229,126 +229,85 @@ struct ReadBatch
 
 /// Reads a rosbag::View in a thread of its own, a few batches ahead of the caller, so that
 /// rosbag's reading and deserialising overlap the core and the writing instead of adding to
-/// them. The bag is used by that thread alone until the ReadAhead is destroyed. An exception
-/// while reading comes with the batch of the messages read before it, so the caller throws it
-/// after handling those, where a single loop would have thrown it.
+/// them: each batch handed to the thread comes back filled with the next messages. The view is
+/// used by that thread alone until the ReadAhead is destroyed. An exception while reading comes
+/// with the batch of the messages read before it, so the caller throws it after handling those,
+/// where a single loop would have thrown it.
 class ReadAhead
 {
 public:
   /// Reads one message into the batch (in the reading thread).
   using ReadOne = std::function<void(const rosbag::MessageInstance&, ReadBatch*)>;
 
-  ReadAhead(rosbag::View* view, ReadOne read_one) : view_(view), read_one_(std::move(read_one))
+  ReadAhead(rosbag::View* view, ReadOne read_one)
+    : view_(view),
+      read_one_(std::move(read_one)),
+      thread_(
+          kBatches, [this](Batch& batch) { fill(batch.get()); }, true)
   {
     for (int i = 0; i < kBatches; ++i)
     {
-      free_.push_back(std::make_unique<ReadBatch>());
+      thread_.hand(std::make_unique<ReadBatch>());
     }
-    thread_ = std::thread([this] { run(); });
   }
-
-  /// Stops the reading (the caller may stop early, on an error) and waits for the thread.
-  ~ReadAhead()
-  {
-    {
-      std::lock_guard<std::mutex> lock(mutex_);
-      stopping_ = true;
-    }
-    changed_.notify_all();
-    thread_.join();
-  }
-  ReadAhead(const ReadAhead&) = delete;
-  ReadAhead& operator=(const ReadAhead&) = delete;
 
   /// The next batch, once read; give it back with recycle() when done with it.
   std::unique_ptr<ReadBatch> next()
   {
-    std::unique_lock<std::mutex> lock(mutex_);
-    changed_.wait(lock, [this] { return !full_.empty(); });
-    std::unique_ptr<ReadBatch> batch = std::move(full_.front());
-    full_.pop_front();
-    return batch;
+    return thread_.waitDone();
   }
 
+  /// Hands a batch back to be filled again (from any thread the caller's work runs in, one at a
+  /// time: the writing thread's).
   void recycle(std::unique_ptr<ReadBatch> batch)
   {
     batch->messages.clear();
     batch->used = 0;
-    {
-      std::lock_guard<std::mutex> lock(mutex_);
-      free_.push_back(std::move(batch));
-    }
-    changed_.notify_all();
+    thread_.hand(std::move(batch));
   }
 
 private:
+  using Batch = std::unique_ptr<ReadBatch>;
   // Batches in flight (read ahead, in the core, waiting to be written) bound the memory; a batch
   // amortises the hand-over.
   static constexpr int kBatches = 8;
   static constexpr std::size_t kBatchMessages = 256;
 
-  void run()
+  /// The next messages of the view into `batch` (in the reading thread); after the last, none.
+  void fill(ReadBatch* batch)
   {
-    std::unique_ptr<ReadBatch> batch = take();
-    if (!batch)
+    if (ended_)
     {
       return;
     }
     try
     {
-      for (const rosbag::MessageInstance& m : *view_)
+      if (!started_)
       {
-        read_one_(m, batch.get());
-        if (batch->messages.size() == kBatchMessages)
-        {
-          hand(std::move(batch));
-          batch = take();
-          if (!batch)
-          {
-            return;  // the caller stopped
-          }
-        }
+        position_ = view_->begin();
+        started_ = true;
       }
+      for (; position_ != view_->end() && batch->messages.size() < kBatchMessages; ++position_)
+      {
+        read_one_(*position_, batch);
+      }
+      ended_ = position_ == view_->end();
     }
     catch (...)
     {
       batch->error = std::current_exception();
+      ended_ = true;
     }
-    batch->last = true;
-    hand(std::move(batch));
-  }
-
-  /// A free batch to fill, waiting for one; nothing once stopping.
-  std::unique_ptr<ReadBatch> take()
-  {
-    std::unique_lock<std::mutex> lock(mutex_);
-    changed_.wait(lock, [this] { return !free_.empty() || stopping_; });
-    if (stopping_)
-    {
-      return nullptr;
-    }
-    std::unique_ptr<ReadBatch> batch = std::move(free_.back());
-    free_.pop_back();
-    return batch;
-  }
-
-  void hand(std::unique_ptr<ReadBatch> batch)
-  {
-    {
-      std::lock_guard<std::mutex> lock(mutex_);
-      full_.push_back(std::move(batch));
-    }
-    changed_.notify_all();
+    batch->last = ended_;
   }
 
   rosbag::View* view_;
   ReadOne read_one_;
-  std::thread thread_;
-  std::mutex mutex_;
-  std::condition_variable changed_;
-  std::deque<std::unique_ptr<ReadBatch>> full_;  ///< read, oldest first
-  std::vector<std::unique_ptr<ReadBatch>> free_;
-  bool stopping_ = false;
+  // The reading thread's.
+  rosbag::View::iterator position_;
+  bool started_ = false;
+  bool ended_ = false;
+  WorkThread<Batch> thread_;  ///< last: started once the rest is built
 };
 
 /// A batch the core has been through: the messages read and the outputs of those that produced

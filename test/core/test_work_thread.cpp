@@ -122,4 +122,25 @@ TEST(WorkThread, KeepsTheItemsDoneForReuse)
   EXPECT_EQ(back->data(), storage) << "the same buffer";
   EXPECT_FALSE(thread.takeDone().has_value());
 }
+
+// What the work made comes back in the order handed, waitDone() waiting for it; once the thread
+// has stopped on an error and nothing done is left, waitDone() throws the error.
+TEST(WorkThread, WaitDoneGivesTheItemsDoneInOrderThenTheError)
+{
+  WorkThread<int> thread(
+      4,
+      [](int& item) {
+        if (item < 0)
+          throw std::runtime_error("unreadable");
+        item *= 10;
+      },
+      true);
+  for (int i = 1; i <= 3; ++i)
+    thread.hand(i);
+  EXPECT_EQ(thread.waitDone(), 10);
+  EXPECT_EQ(thread.waitDone(), 20);
+  thread.hand(-1);
+  EXPECT_EQ(thread.waitDone(), 30);
+  EXPECT_THROW(thread.waitDone(), std::runtime_error);
+}
 }  // namespace periodic_bias_compensation

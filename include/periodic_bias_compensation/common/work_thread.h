@@ -11,7 +11,6 @@
 #include <optional>
 #include <thread>
 #include <utility>
-#include <vector>
 
 namespace periodic_bias_compensation
 {
@@ -19,10 +18,12 @@ namespace periodic_bias_compensation
 /// most `capacity` items waiting: hand() waits while that many do, so the items in flight (and
 /// their memory) are bounded. An exception thrown by `work` stops the thread and drops what waits;
 /// the next hand() or finish() throws it, so the caller stops where a single loop would have. The
-/// items `work` is done with are kept for the caller to reuse (takeDone()), their buffers with
-/// them, when `keep_done` is set.
+/// items `work` is done with are kept for the caller, in order (takeDone(), waitDone()): to reuse
+/// their buffers, or as what the work made (a batch read ahead), when `keep_done` is set.
 ///
-/// Threading: hand(), finish() and takeDone() are for one caller thread.
+/// Threading: every call takes the one lock; the items may be handed from one thread and taken
+/// done from another (a reader's batches, handed back by the thread that writes them). Nothing
+/// may be handed once finish() is called.
 template <typename T>
 class WorkThread
 {
@@ -61,14 +62,27 @@ public:
     changed_.notify_all();
   }
 
-  /// An item `work` is done with, if one is kept (keep_done); never waits.
+  /// The oldest item `work` is done with, if one is kept (keep_done); never waits.
   std::optional<T> takeDone()
   {
     std::lock_guard<std::mutex> lock(mutex_);
     if (done_.empty())
       return std::nullopt;
-    std::optional<T> item(std::move(done_.back()));
-    done_.pop_back();
+    std::optional<T> item(std::move(done_.front()));
+    done_.pop_front();
+    return item;
+  }
+
+  /// The oldest item `work` is done with (keep_done), waiting for one; throws what stopped the
+  /// thread, if anything did, once none is left.
+  T waitDone()
+  {
+    std::unique_lock<std::mutex> lock(mutex_);
+    changed_.wait(lock, [this] { return !done_.empty() || error_; });
+    if (done_.empty())
+      std::rethrow_exception(error_);
+    T item = std::move(done_.front());
+    done_.pop_front();
     return item;
   }
 
@@ -118,7 +132,10 @@ private:
         return;
       }
       if (keep_done_)
+      {
         done_.push_back(std::move(item));
+        changed_.notify_all();
+      }
     }
   }
 
@@ -127,8 +144,8 @@ private:
   Work work_;
   std::mutex mutex_;
   std::condition_variable changed_;
-  std::deque<T> waiting_;  ///< oldest first
-  std::vector<T> done_;
+  std::deque<T> waiting_;   ///< oldest first
+  std::deque<T> done_;      ///< oldest first
   bool finishing_ = false;  ///< finish(): what waits is still done
   bool abandoned_ = false;  ///< the destructor: nothing more is done
   std::exception_ptr error_;
