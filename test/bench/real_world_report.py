@@ -54,6 +54,12 @@ def markdown(tests):
           % ' '.join('%.2f' % v for v in seeds(sea, 'heave_error_percent_hs_clean_')))
     print('| moored JONSWAP, 15 min, RW 6e-4 m/s^2/sqrt(s) | heave RMS error [%% of Hs] | median <= 4, worst <= 6 | %s |'
           % ' '.join('%.2f' % v for v in seeds(sea, 'heave_error_percent_hs_random_walk_')))
+    slow = tests.get('MooredHeaveVarianceStaysHonestUnderSlowBias', {})
+    slow_errors = seeds(slow, 'heave_error_percent_hs_')
+    if slow_errors:
+        print('| moored JONSWAP, 15 min, RW 6e-4 and a slow periodic bias of 0.04 m/s^2 (120-240 s) | heave RMS error '
+              '[%% of Hs] (mean squared error over the mean published variance) | variance: 1/3 to 2.5 | %s |'
+              % ' '.join('%.2f (%.2f)' % (v, w) for v, w in zip(slow_errors, seeds(slow, 'heave_error_to_variance_'))))
     horizontal = tests.get('MooredBroadSeaSurgeAndSway', {})
     for axis in ('surge', 'sway'):
         errors = seeds(horizontal, axis + '_error_')

@@ -141,6 +141,8 @@ class RenderTest(unittest.TestCase):
         self.assertIn('| 17.1 (84.8) |', self.md)  # no bound in these results: the older row
         self.assertIn('sway RMS error [% of true] (harmonic model alone; causal bound) | < 35 and < half of it '
                       '| 22.8 (88.3; 21.9) |', self.md)
+        self.assertIn('slow periodic bias of 0.04 m/s^2 (120-240 s) | heave RMS error [% of Hs] (mean squared error '
+                      'over the mean published variance) | variance: 1/3 to 2.5 | 3.41 (1.62) |', self.md)
         self.assertIn('random walk (2 seeds)', self.md)
         self.assertIn('300 components; 1 seed)', self.md)
 
