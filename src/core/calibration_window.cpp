@@ -27,9 +27,20 @@ double windowOffset(const std::vector<double>& values, const WindowOffsetOptions
 bool CalibrationWindow::add(const ImuSample& sample, double dt, double duration)
 {
   samples_.push_back({ sample, dt });
+  force_sum_ += sample.specific_force;
+  any_without_orientation_ |= !sample.has_orientation;
   if (samples_.size() == 1)
     start_ = sample.t;
   return sample.t - start_ >= duration;
+}
+
+void CalibrationWindow::noteLevel(const Vector3& level_acceleration)
+{
+  // Only in step with the samples, each of them with its orientation.
+  if (any_without_orientation_ || level_axes_[0].size() + 1 != samples_.size())
+    return;
+  for (int i = 0; i < 3; ++i)
+    level_axes_[i].push_back(level_acceleration[i]);
 }
 
 Vector3 CalibrationWindow::provisionalBias(const Vector3& level_acceleration)
@@ -40,25 +51,23 @@ Vector3 CalibrationWindow::provisionalBias(const Vector3& level_acceleration)
 
 Vector3 CalibrationWindow::meanSpecificForce(bool* any_without_orientation) const
 {
-  Vector3 mean = Vector3::Zero();
-  *any_without_orientation = false;
-  for (const auto& b : samples_)
-  {
-    mean += b.sample.specific_force;
-    *any_without_orientation |= !b.sample.has_orientation;
-  }
-  return mean / static_cast<double>(samples_.size());
+  *any_without_orientation = any_without_orientation_;
+  return force_sum_ / static_cast<double>(samples_.size());
 }
 
-std::array<std::vector<double>, 3> CalibrationWindow::levelAxes(
-    const std::function<Vector3(const ImuSample&)>& level) const
+std::array<std::vector<double>, 3> CalibrationWindow::levelAxes(const std::function<Vector3(const ImuSample&)>& level)
 {
   std::array<std::vector<double>, 3> axes;
-  for (auto& axis : axes)
-    axis.reserve(samples_.size());
-  for (const auto& b : samples_)
+  const std::size_t noted = any_without_orientation_ ? 0 : std::min(level_axes_[0].size(), samples_.size());
+  for (int i = 0; i < 3; ++i)
   {
-    const Vector3 a = level(b.sample);
+    axes[i].swap(level_axes_[i]);
+    axes[i].resize(noted);
+    axes[i].reserve(samples_.size());
+  }
+  for (std::size_t k = noted; k < samples_.size(); ++k)
+  {
+    const Vector3 a = level(samples_[k].sample);
     for (int i = 0; i < 3; ++i)
       axes[i].push_back(a[i]);
   }

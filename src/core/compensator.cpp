@@ -344,6 +344,7 @@ public:
         // Until the bias and level are known the double integral swings with whatever the
         // provisional bias leaves: nothing is claimed, the motion is held at zero.
         output = process(s, dt);
+        calibration_.noteLevel(level_);
         holdOutput(&output);
       }
     }

@@ -119,6 +119,47 @@ TEST(CalibrationWindow, MeanForceAndLevelAxes)
   EXPECT_NEAR(axes[2][0], -0.1, 1e-12);
 }
 
+// The level accelerations noted as the samples came are the axes (the last sample's, not noted, is
+// levelled at the end); one sample without orientation and every sample is levelled at the end,
+// where its level frame is known. The window hands the noted values over and starts afresh.
+TEST(CalibrationWindow, NotedLevelsAreTheAxesWhileEverySampleHasItsOrientation)
+{
+  const auto at_end = [](const ImuSample& s) -> Vector3 { return s.specific_force - Vector3(0, 0, 9.8); };
+  CalibrationWindow window;
+  window.reserve(4);
+  for (int k = 0; k < 3; ++k)
+  {
+    window.add(sampleAt(0.02 * k, Vector3(0.1 * k, 0.0, 9.8), true), 0.02, 10.0);
+    if (k < 2)
+      window.noteLevel(Vector3(100.0 + k, 0.0, 0.0));  // told apart from what `at_end` gives
+  }
+  auto axes = window.levelAxes(at_end);
+  ASSERT_EQ(axes[0].size(), 3u);
+  EXPECT_EQ(axes[0][0], 100.0);
+  EXPECT_EQ(axes[0][1], 101.0);
+  EXPECT_NEAR(axes[0][2], 0.2, 1e-12) << "not noted: levelled at the end";
+
+  window.clear();
+  for (int k = 0; k < 3; ++k)
+  {
+    window.add(sampleAt(0.02 * k, Vector3(0.1 * k, 0.0, 9.8), k != 1), 0.02, 10.0);
+    window.noteLevel(Vector3(100.0 + k, 0.0, 0.0));
+  }
+  axes = window.levelAxes(at_end);
+  ASSERT_EQ(axes[0].size(), 3u);
+  for (int k = 0; k < 3; ++k)
+    EXPECT_NEAR(axes[0][k], 0.1 * k, 1e-12) << "a sample without orientation: all levelled at the end";
+
+  window.take();
+  window.add(sampleAt(1.0, Vector3(0.5, 0.0, 9.8), true), 0.0, 10.0);
+  axes = window.levelAxes(at_end);
+  ASSERT_EQ(axes[0].size(), 1u);
+  EXPECT_NEAR(axes[0][0], 0.5, 1e-12);
+  bool any_without = true;
+  EXPECT_NEAR(window.meanSpecificForce(&any_without).x(), 0.5, 1e-12);
+  EXPECT_FALSE(any_without) << "the sums start afresh with the window";
+}
+
 // Paper Table 1: a residual acceleration c left after the bias integrates to a velocity c t,
 // whose mean over a window of T is c T / 2; none left, no drift.
 TEST(CalibrationWindow, ConstantPositionDriftIsTheMeanVelocity)

@@ -51,6 +51,7 @@ public:
   void clear()
   {
     samples_.clear();
+    forgetSums();
   }
   bool empty() const
   {
@@ -65,6 +66,7 @@ public:
   {
     std::vector<Sample> taken;
     taken.swap(samples_);
+    forgetSums();
     return taken;
   }
   /// Room for n samples, so that adding them moves none (a window of seconds at a high rate is
@@ -72,6 +74,8 @@ public:
   void reserve(std::size_t n)
   {
     samples_.reserve(n);
+    for (auto& axis : level_axes_)
+      axis.reserve(n);
   }
   /// Adds a sample; whether the window now spans `duration` [s] from its first sample.
   bool add(const ImuSample& sample, double dt, double duration);
@@ -80,20 +84,40 @@ public:
   /// window's first sample [m/s^2].
   Vector3 provisionalBias(const Vector3& level_acceleration);
 
-  /// Mean specific force of the window [m/s^2]; *any_without_orientation: some sample had no
-  /// orientation.
+  /// The level acceleration of the newest sample, as the owner found it while the window filled:
+  /// kept for levelAxes() where the sample has its own orientation (the level frame then does not
+  /// wait for the window's end), so that the window's end does not level every sample again.
+  void noteLevel(const Vector3& level_acceleration);
+
+  /// Mean specific force of the window [m/s^2] (summed as the samples came); *any_without_orientation:
+  /// some sample had no orientation.
   Vector3 meanSpecificForce(bool* any_without_orientation) const;
 
-  /// Each level axis's samples, by `level` (the sample's level acceleration).
-  std::array<std::vector<double>, 3> levelAxes(const std::function<Vector3(const ImuSample&)>& level) const;
+  /// Each level axis's samples, by `level` (the sample's level acceleration): those noted, the rest
+  /// by `level`; every sample by `level` when one had no orientation. Once per window: the noted
+  /// values are handed over.
+  std::array<std::vector<double>, 3> levelAxes(const std::function<Vector3(const ImuSample&)>& level);
 
   /// Paper Table 1: the mean over the window of the velocity integrated from the level
   /// acceleration less `bias` [m/s].
   Vector3 constantPositionDrift(const std::function<Vector3(const ImuSample&)>& level, const Vector3& bias) const;
 
 private:
+  void forgetSums()
+  {
+    force_sum_ = Vector3::Zero();
+    any_without_orientation_ = false;
+    for (auto& axis : level_axes_)
+      axis.clear();
+  }
+
   std::vector<Sample> samples_;
   double start_ = 0.0;  ///< time of the first sample [s]
   Vector3 provisional_sum_ = Vector3::Zero();
+  Vector3 force_sum_ = Vector3::Zero();  ///< of the samples' specific force, in order
+  bool any_without_orientation_ = false;
+  /// The noted level accelerations of the first samples, per axis (none once a sample without
+  /// orientation came).
+  std::array<std::vector<double>, 3> level_axes_;
 };
 }  // namespace periodic_bias_compensation
