@@ -74,7 +74,7 @@ public:
   }
 
   /// The oldest item `work` is done with (keep_done), waiting for one; throws what stopped the
-  /// thread, if anything did, once none is left.
+  /// thread, if anything did, once none is left. Not after finish(): nothing more would come.
   T waitDone()
   {
     std::unique_lock<std::mutex> lock(mutex_);

@@ -39,8 +39,9 @@
 //    mean square is also kSeaOverError times its error.
 // While the ship turns, the spectrum is measured anew (WienerHeave::restartRecord); the vertical
 // axis crosses over to the fixed filter with WienerHeave::kDesignFade and back once the new record
-// gives a design (at once where the blend publishes less than kMinWeight of it). A horizontal axis takes the spectral estimate only, and none while the owner says it may not
-// (a ship turning, no attitude): its share then fades out with kBlockedFade, and returns as fast.
+// gives a design (at once where the blend publishes less than kMinWeight of it). A horizontal
+// axis takes the spectral estimate only, and none while the owner says it may not (a ship
+// turning, no attitude): its share then fades out with kBlockedFade, and returns as fast.
 //
 // Threading: not thread-safe; the owner serialises calls.
 #pragma once
