@@ -157,20 +157,23 @@ class Bench:
         data_s, speed, repetitions = (60, 4, 1) if self.quick else (300, 4, 2)
         log('core latency: %d s of data at %g times its pace, designs in the background and in the call'
             % (data_s, speed))
+
+        def latency(*args):
+            """The figures of one core_latency run on the ROS scenario."""
+            r = self.output([self.exe('core_latency'), '--scenario', self.ros_scenario] + [str(a) for a in args],
+                            check=True)
+            return fields([line for line in r.stdout.split('\n') if line.startswith('designs=')][-1])
+
         runs = []
         for _ in range(repetitions):
             for designs in ('background', 'calling'):
-                r = self.output([self.exe('core_latency'), '--scenario', self.ros_scenario, '--duration', str(data_s),
-                                 '--speed', str(speed), '--designs', designs], check=True)
-                runs.append(fields([line for line in r.stdout.split('\n') if line.startswith('designs=')][-1]))
+                runs.append(latency('--duration', data_s, '--speed', speed, '--designs', designs))
         # The nodelet's faster rates, at the IMU's own pace: what the first samples and the end of
         # the calibration window cost where the buffers sized for the rate are largest.
         fast_s = 15 if self.quick else 30
         for rate in (1000, 2800):
             log('core latency: %d s of data at %d Hz at its own pace' % (fast_s, rate))
-            r = self.output([self.exe('core_latency'), '--scenario', self.ros_scenario, '--duration', str(fast_s),
-                             '--rate', str(rate), '--speed', '1'], check=True)
-            runs.append(fields([line for line in r.stdout.split('\n') if line.startswith('designs=')][-1]))
+            runs.append(latency('--duration', fast_s, '--rate', rate, '--speed', 1))
         return {'seed': self.ros_seed, 'duration': data_s, 'speed': speed, 'fast_duration': fast_s, 'runs': runs}
 
     def nodelet_run(self, label, transport, *extra, env=None, group=None):

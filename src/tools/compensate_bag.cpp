@@ -282,16 +282,17 @@ private:
     }
     try
     {
-      if (!started_)
+      if (!position_)
       {
         position_ = view_->begin();
-        started_ = true;
+        end_ = view_->end();
       }
-      for (; position_ != view_->end() && batch->messages.size() < kBatchMessages; ++position_)
+      rosbag::View::iterator& position = *position_;
+      for (; position != end_ && batch->messages.size() < kBatchMessages; ++position)
       {
-        read_one_(*position_, batch);
+        read_one_(*position, batch);
       }
-      ended_ = position_ == view_->end();
+      ended_ = position == end_;
     }
     catch (...)
     {
@@ -303,9 +304,9 @@ private:
 
   rosbag::View* view_;
   ReadOne read_one_;
-  // The reading thread's.
-  rosbag::View::iterator position_;
-  bool started_ = false;
+  // The reading thread's: where it is in the view (none before the first batch) and its end.
+  std::optional<rosbag::View::iterator> position_;
+  rosbag::View::iterator end_;
   bool ended_ = false;
   WorkThread<Batch> thread_;  ///< last: started once the rest is built
 };
