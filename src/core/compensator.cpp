@@ -1,4 +1,5 @@
 #include "periodic_bias_compensation/core/compensator.h"
+#include "background.h"
 #include "periodic_bias_compensation/core/broadband_wave.h"
 #include "periodic_bias_compensation/core/calibration_window.h"
 #include "periodic_bias_compensation/core/drift_observer.h"
@@ -16,6 +17,8 @@
 #include <algorithm>
 #include <cmath>
 #include <deque>
+#include <future>
+#include <memory>
 #include <stdexcept>
 #include <vector>
 
@@ -37,6 +40,9 @@ constexpr double kDecimatedRateFactor = 5.0;
 /// replayed over the next calibration_duration / (kReplayPerSample - 1) instead of within one
 /// sample's call, its outputs held until it has caught up.
 constexpr std::size_t kReplayPerSample = 64;
+/// From the calibration window's end to taking up its period search, which runs on the core's
+/// design thread meanwhile (milliseconds over a window of 10 s at 1 kHz and more) [s of data].
+constexpr double kWindowSearchDelay = 0.2;
 
 bool isFinite(const Vector3& v)
 {
@@ -174,6 +180,8 @@ public:
     planInBackground([] { warmFftPlans({ NoiseFloor::kBlock, WienerHeave::kDftSize }); });
     // The wave stages as configured (per axis: vertical or not, the wave band) from the first
     // sample on, calibration window or not (a bias from a file skips it).
+    for (int i = 0; i < 3; ++i)
+      makeWaveStages(i);
     resetMotion();
   }
 
@@ -315,6 +323,7 @@ public:
     {
       axes_[i] = AxisEstimator();
       axes_[i].drift.setBias(constant_bias_[i]);  // zero unless it came from a file
+      makeWaveStages(i);
     }
     resetMotion();
   }
@@ -333,11 +342,20 @@ public:
       replay_.push_back({ s, dt });
       continueReplay(&output);
     }
+    else if (searchingWindow())
+    {
+      // The window has ended; its samples and those since wait in it for the replay.
+      calibration_.add(s, dt, config_.calibration_duration);
+      if (s.t >= window_due_)
+        finishCalibration(&output);
+      else
+        holdOutput(&output);
+    }
     else if (needsCalibration())
     {
       if (calibration_.add(s, dt, config_.calibration_duration) && planned_rate_ > 0.0)
       {
-        finishCalibration(&output);
+        endCalibrationWindow(s.t, &output);
       }
       else
       {
@@ -497,7 +515,7 @@ private:
       // replay's, finishCalibration) allocated now, a few per cent over for stamp jitter: growing
       // it would copy megabytes in one sample's call at a high rate.
       const std::size_t expected = static_cast<std::size_t>(samples) + samples / 50 + 16;
-      calibration_.reserve(replayCapacity(expected));
+      calibration_.reserve(replayCapacity(expected, rate));
       // windowOffset plans the calibration window's transform on the sample that ends the
       // window: the sizes that window can have are planned now, in the background.
       planInBackground([samples] {
@@ -528,14 +546,22 @@ private:
       axis.drift.restartMotion();
       axis.slow_start = now_;
       axis.residual_variance = 0.0;
-      axis.broadband = BroadbandWave(&axis == &axes_[2], config_.heave_corner_frequency, config_.min_frequency, true);
-      axis.broadband.setBackgroundDesigns(background_designs_);
+      // Reset in place: the spectral estimate keeps its buffers (sized for the rate).
+      axis.broadband.configure(config_.heave_corner_frequency, config_.min_frequency);
       axis.consistency = WaveConsistency(config_.min_frequency);
       axis.paper.reset();
       axis.d_v = axis.d_p = 0.0;
       axis.time_since_reset = 0.0;
     }
     since_analysis_ = 0;
+  }
+
+  /// Axis i's broadband wave estimate as configured: z the vertical one, each reading the other
+  /// two axes.
+  void makeWaveStages(int i)
+  {
+    axes_[i].broadband = BroadbandWave(i == 2, config_.heave_corner_frequency, config_.min_frequency, true);
+    axes_[i].broadband.setBackgroundDesigns(background_designs_);
   }
 
   /// gyro_attitude: a sample without orientation gets the gyro's, which starts from the IMU's
@@ -545,33 +571,84 @@ private:
     return leveller_.levelAcceleration(s, config_.gravity);
   }
 
-  /// Ends the calibration window: level and constant bias from the buffered samples, then the
-  /// window is processed again with them (only past samples are used: causal).
-  void finishCalibration(CompensatorOutput* out)
+  /// Ends the calibration window at its last sample (time t): the level frame from its mean
+  /// specific force, then each level axis's constant bias (windowOffset). A period search over
+  /// the window runs on the core's design thread and is taken up kWindowSearchDelay of data later
+  /// (the samples meanwhile wait in the window, outputs held); a window at rest or a bias from a
+  /// file finishes at once.
+  void endCalibrationWindow(double t, CompensatorOutput* out)
   {
     bool any_without_orientation = false;
     const Vector3 mean_force = calibration_.meanSpecificForce(&any_without_orientation);
     leveller_.calibrate(mean_force, any_without_orientation);
-
-    const auto level = [this](const ImuSample& sample) -> Vector3 { return levelAcceleration(sample); };
-    std::array<FrequencyEstimate, 3> window_frequency;
+    window_samples_ = calibration_.samples().size();
+    window_due_ = t;
     if (!bias_from_file_)
     {
-      const std::array<std::vector<double>, 3> axes = calibration_.levelAxes(level);
+      const auto level = [this](const ImuSample& sample) -> Vector3 { return levelAcceleration(sample); };
+      const auto axes = std::make_shared<const std::array<std::vector<double>, 3>>(calibration_.levelAxes(level));
       const WindowOffsetOptions options = { config_.assume_static_calibration || config_.mode == Mode::kPaper,
                                             rate_,
                                             config_.min_frequency,
                                             config_.max_frequency,
                                             config_.min_peak_ratio,
                                             config_.harmonics };
+      if (!options.at_rest)
+        window_due_ += kWindowSearchDelay;
       for (int i = 0; i < 3; ++i)
-        constant_bias_[i] = windowOffset(axes[i], options, &window_frequency[i]);
+      {
+        auto task = std::make_shared<std::packaged_task<WindowSearch()>>([axes, options, i] {
+          WindowSearch result;
+          result.offset = windowOffset((*axes)[i], options, &result.frequency);
+          return result;
+        });
+        window_search_[i] = task->get_future().share();
+        if (background_designs_ && !options.at_rest)
+          designInBackground([task] { (*task)(); });
+        else
+          (*task)();
+      }
+    }
+    if (window_due_ <= t)
+      finishCalibration(out);
+    else
+      holdOutput(out);
+  }
+
+  /// A window's period search is under way (endCalibrationWindow).
+  bool searchingWindow() const
+  {
+    return window_search_[0].valid();
+  }
+
+  /// Takes up the window's constant bias and period, then the window is processed again with them
+  /// (only past samples are used: causal), and the samples that came since.
+  void finishCalibration(CompensatorOutput* out)
+  {
+    std::array<FrequencyEstimate, 3> window_frequency;
+    if (searchingWindow())
+    {
+      for (int i = 0; i < 3; ++i)
+      {
+        // Not made yet: the searches still queued are made here meanwhile.
+        while (window_search_[i].wait_for(std::chrono::seconds(0)) != std::future_status::ready && designQueuedHere())
+        {
+        }
+        const WindowSearch& result = window_search_[i].get();
+        if (!bias_from_file_)
+        {
+          constant_bias_[i] = result.offset;
+          window_frequency[i] = result.frequency;
+        }
+      }
     }
     calibrated_ = true;
     for (int i = 0; i < 3; ++i)
       axes_[i].drift.setBias(constant_bias_[i]);
     if (config_.mode == Mode::kPaper)
     {
+      // The window alone: a paper-mode window is taken up at its last sample.
+      const auto level = [this](const ImuSample& sample) -> Vector3 { return levelAcceleration(sample); };
       const Vector3 drift = calibration_.constantPositionDrift(level, constant_bias_);
       for (int i = 0; i < 3; ++i)
         axes_[i].constant_d_p = drift[i];
@@ -586,17 +663,18 @@ private:
         axes_[i].frequency = window_frequency[i].frequency;
       }
     replay_ = calibration_.take();
-    window_end_ = replay_.size();
-    replay_.reserve(replayCapacity(window_end_));
+    window_end_ = window_samples_;
+    replay_.reserve(replayCapacity(window_end_, rate_));
     replayed_ = 0;
     continueReplay(out);
   }
 
-  /// The replay's length for a window of `window` samples: those and the samples that arrive
-  /// while it catches up.
-  static std::size_t replayCapacity(std::size_t window)
+  /// The replay's length for a window of `window` samples at `rate` [Hz]: those, the samples that
+  /// arrive while its period search runs, and those that arrive while it catches up.
+  static std::size_t replayCapacity(std::size_t window, double rate)
   {
-    return window + window / (kReplayPerSample - 1) + kReplayPerSample;
+    const std::size_t queued = window + static_cast<std::size_t>(std::ceil(kWindowSearchDelay * rate)) + 1;
+    return queued + queued / (kReplayPerSample - 1) + kReplayPerSample;
   }
 
   /// The next kReplayPerSample samples of the replay: the window's, then those that arrived
@@ -617,11 +695,13 @@ private:
       endReplay();
   }
 
-  /// The replay is over, or dropped (a reset or recalibration during it): nothing is queued.
+  /// The replay is over, or dropped (a reset or recalibration during it or during the window's
+  /// period search): nothing is queued.
   void endReplay()
   {
     replay_.clear();
     replayed_ = window_end_ = 0;
+    window_search_ = {};
   }
 
   /// At the calibration window's last sample, as it is processed again. The replay's harmonic
@@ -916,8 +996,17 @@ private:
   std::vector<CalibrationWindow::Sample> replay_;  ///< the ended window's samples and those since
   std::size_t window_end_ = 0;                     ///< of replay_, the window's
   std::size_t replayed_ = 0;                       ///< of replay_ processed again
-  double rate_ = 0.0;                              ///< sample rate [Hz] (time_)
-  double planned_rate_ = 0.0;                      ///< rate the FFT windows were planned for [Hz]
+  /// A window's constant bias and dominant frequency (windowOffset).
+  struct WindowSearch
+  {
+    double offset = 0.0;
+    FrequencyEstimate frequency;
+  };
+  std::array<std::shared_future<WindowSearch>, 3> window_search_;  ///< per level axis, while it runs
+  double window_due_ = 0.0;                                        ///< data time at which the search is taken up [s]
+  std::size_t window_samples_ = 0;                                 ///< samples of the ended window
+  double rate_ = 0.0;                                              ///< sample rate [Hz] (time_)
+  double planned_rate_ = 0.0;                                      ///< rate the FFT windows were planned for [Hz]
   int hop_samples_ = 1;
   int since_analysis_ = 0;
   double now_ = 0.0;                 ///< time of the sample being processed [s]

@@ -31,7 +31,16 @@ void WienerHeave::reset()
   dt_ = sized_dt_ = 0.0;
   decimation_ = 0;
   samples_ = 0;
-  channels_ = {};
+  // The rings keep their memory (a reset at the calibration window's end would otherwise unmap
+  // megabytes at a high rate and fault them in again over the next samples): what a reset
+  // leaves in them is never read, as a FIR is never longer than the input held since.
+  for (Channel& channel : channels_)
+  {
+    channel.first.clear();
+    channel.second.clear();
+    channel.first_sum = channel.second_sum = 0.0;
+    channel.decimated.clear();
+  }
   ring_length_ = 0;
   newest_ = 0;
   since_design_ = 0.0;
@@ -101,12 +110,17 @@ WienerHeaveOutput WienerHeave::step(double a, double period, double noise_densit
     sized_dt_ = period;
     decimation_ = std::max(1, static_cast<int>(std::lround(kDesignPeriod / dt_)));
     delay_samples_ = std::lround(kDesignDelay / dt_);
-    ring_length_ = static_cast<int>(std::ceil(kMaxSpan / (decimation_ * dt_)));
+    // The longest FIR's taps (statistics(): lround(span * fs)), rounded as they are: a ceiling
+    // would turn 480 into 481 with the period measured a hair short, and the next reset would
+    // size the rings anew.
+    ring_length_ = std::max(1, static_cast<int>(std::lround(kMaxSpan / (decimation_ * dt_))));
     for (int c = 0; c < channels_used_; ++c)
     {
       channels_[c].first.assign(decimation_, 0.0);
       channels_[c].second.assign(decimation_, 0.0);
-      channels_[c].history = ZeroedBuffer(static_cast<size_t>(ring_length_) * decimation_);
+      const size_t history = static_cast<size_t>(ring_length_) * decimation_;
+      if (channels_[c].history.size() != history)
+        channels_[c].history = ZeroedBuffer(history);
     }
   }
   std::array<double, kChannels> input{ a, 0.0, 0.0 };

@@ -275,3 +275,64 @@ TEST(Compensator, TheConfiguredWaveBandHoldsWithoutACalibrationWindow)
     EXPECT_LT(std::sqrt(wave2 / truth2), 0.1) << (from_file ? "bias from a file" : "after a calibration window");
   }
 }
+
+// The calibration window's period search runs on the core's design thread and is taken up a set
+// time of data later: the outputs are those of the search made in the sample's call, and a
+// reset or recalibration while it runs starts a window of its own that ends as any other.
+TEST(Compensator, TheWindowsPeriodSearchTakenUpLaterChangesNoOutput)
+{
+  const CompensatorConfig config = modeConfig(Mode::kDefault);
+  const Vector3 bias(0.02, -0.01, 0.03);
+  const double rate = 200.0, w = 2.0 * M_PI / 7.0;
+  const auto sample = [&](double t) {
+    pbc::ImuSample s;
+    s.t = 50.0 + t;
+    // Heave of 1 m at 7 s: the window (10 s) holds a non-whole number of periods, and the
+    // search's harmonic fit decides its offset.
+    s.specific_force = Vector3(0.0, 0.0, pbc::kStandardGravity + w * w * std::sin(w * t)) + bias;
+    s.has_orientation = true;
+    return s;
+  };
+  Compensator background(config), calling(config);
+  calling.setBackgroundDesigns(false);
+  bool tracking = false;
+  for (int k = 0; k < static_cast<int>(40 * rate); ++k)
+  {
+    CompensatorOutput a, b;
+    background.addSample(sample(k / rate), &a);
+    calling.addSample(sample(k / rate), &b);
+    ASSERT_EQ(a.state, b.state) << "at " << k / rate << " s";
+    ASSERT_EQ(a.position_wave.z(), b.position_wave.z()) << "at " << k / rate << " s";
+    ASSERT_EQ(a.position_filtered.z(), b.position_filtered.z()) << "at " << k / rate << " s";
+    tracking |= a.state == pbc::OutputState::kTracking;
+  }
+  EXPECT_TRUE(tracking);
+
+  // Stopped while the search runs (its result, made or not, is dropped), then a window anew:
+  // after reset() the outputs are a fresh compensator's on the same samples.
+  for (const bool recalibrate : { true, false })
+  {
+    Compensator c(config), fresh(config);
+    int k = 0;
+    for (; k < static_cast<int>((config.calibration_duration + 0.05) * rate); ++k)
+      c.addSample(sample(k / rate), nullptr);
+    EXPECT_FALSE(c.calibrated());
+    if (recalibrate)
+      c.recalibrate();
+    else
+      c.reset();
+    CompensatorOutput out, expected;
+    for (int n = 0; n < static_cast<int>(30 * rate); ++n, ++k)
+    {
+      c.addSample(sample(k / rate), &out);
+      fresh.addSample(sample(k / rate), &expected);
+      if (!recalibrate)
+      {
+        ASSERT_EQ(out.position_wave.z(), expected.position_wave.z()) << "at " << k / rate << " s";
+        ASSERT_EQ(out.position_filtered.z(), expected.position_filtered.z()) << "at " << k / rate << " s";
+      }
+    }
+    EXPECT_TRUE(c.calibrated()) << (recalibrate ? "recalibrate" : "reset");
+    EXPECT_EQ(out.state, pbc::OutputState::kTracking) << (recalibrate ? "recalibrate" : "reset");
+  }
+}

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdio>
 #include <future>
+#include <memory>
 #include <random>
 #include <vector>
 
@@ -412,6 +413,40 @@ TEST(WienerHeave, FirstDesignResetAndCopy)
   EXPECT_EQ(heave.peakFrequency(), 0.0);
 }
 
+// reset() keeps the buffers (sized for the rate) but nothing of what they held: after a large swell
+// and a reset, a small wind sea gives what a fresh instance gives, sample for sample, with its
+// companions too.
+TEST(WienerHeave, AResetLeavesNothingOfTheRecordBefore)
+{
+  const Sea swell(1.0 / 14.0, 12.0, 5), wind(1.0 / 6.0, 1.0, 6), other(1.0 / 9.0, 0.8, 7);
+  const double rate = 40.0;
+  for (const bool vertical : { false, true })
+  {
+    WienerHeave reused(0.03, vertical, true), fresh(0.03, vertical, true);
+    double x, v, a, xo, vo, ao;
+    for (long i = 0; i < static_cast<long>(300 * rate); ++i)
+    {
+      swell.at(i / rate, &x, &v, &a);
+      other.at(i / rate, &xo, &vo, &ao);
+      reused.update(a, 1.0 / rate, 1e-5, { 2.0 * a, ao });
+    }
+    reused.reset();
+    long valid = 0;
+    for (long i = 0; i < static_cast<long>(200 * rate); ++i)
+    {
+      wind.at(i / rate, &x, &v, &a);
+      other.at(i / rate, &xo, &vo, &ao);
+      const WienerHeaveOutput r = reused.update(a, 1.0 / rate, 1e-5, { ao, 0.5 * a });
+      const WienerHeaveOutput f = fresh.update(a, 1.0 / rate, 1e-5, { ao, 0.5 * a });
+      ASSERT_EQ(r.valid, f.valid) << i / rate << " s";
+      ASSERT_EQ(r.position, f.position) << i / rate << " s";
+      ASSERT_EQ(r.velocity, f.velocity) << i / rate << " s";
+      valid += r.valid;
+    }
+    EXPECT_GT(valid, 100 * rate) << (vertical ? "vertical" : "horizontal");
+  }
+}
+
 // After restartRecord() (a turn) the last design stays applied but is stale until one from the
 // new record, kRestartDesign of it; that design describes the sea met since, not the one before.
 TEST(WienerHeave, RestartRecordDesignsFromTheSeaMetSince)
@@ -496,7 +531,15 @@ TEST(WienerHeave, AWaitingSampleMakesAQueuedDesign)
 {
   std::promise<void> release;
   std::shared_future<void> released = release.get_future().share();
-  designInBackground([released] { released.wait(); });
+  // Held once it has started: a task still queued (other tests' designs ahead of it) would be
+  // the oldest one a waiting sample takes.
+  auto started = std::make_shared<std::promise<void>>();
+  std::future<void> running = started->get_future();
+  designInBackground([released, started] {
+    started->set_value();
+    released.wait();
+  });
+  running.wait();
   const Sea sea(1.0 / 8.0, 2.0, 34);
   const double rate = 20.0, dt = 1.0 / rate;
   auto run = std::async(std::launch::async, [&] {
