@@ -544,7 +544,9 @@ def spectral_rows(name, reference, track, variances):
         published = float('nan')
         if variances is not None:
             variance = np.interp(grid[keep], variances[:, 0], variances[:, i + 1])
-            variance = variance[variance < HELD_VARIANCE]
+            # A point between a held output and a tracking one takes neither's variance.
+            held = np.interp(grid[keep], variances[:, 0], (variances[:, i + 1] >= HELD_VARIANCE).astype(float))
+            variance = variance[held == 0.0]
             published = float(np.sqrt(np.mean(variance))) if variance.size else float('nan')
         rows.append((axis, correlation, 4 * ours.std(), 4 * ref.std(), difference, published))
     return rows

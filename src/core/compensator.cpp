@@ -344,18 +344,24 @@ public:
     }
     else if (searchingWindow())
     {
-      // The window has ended; its samples and those since wait in it for the replay.
+      // The window has ended; its samples and those since wait in it for the replay, each
+      // processed meanwhile as during the window (its period search, its lock), outputs held.
       calibration_.add(s, dt, config_.calibration_duration);
       if (s.t >= window_due_)
+      {
         finishCalibration(&output);
+      }
       else
+      {
+        output = process(s, dt);
         holdOutput(&output);
+      }
     }
     else if (needsCalibration())
     {
       if (calibration_.add(s, dt, config_.calibration_duration) && planned_rate_ > 0.0)
       {
-        endCalibrationWindow(s.t, &output);
+        endCalibrationWindow(s, dt, &output);
       }
       else
       {
@@ -571,18 +577,18 @@ private:
     return leveller_.levelAcceleration(s, config_.gravity);
   }
 
-  /// Ends the calibration window at its last sample (time t): the level frame from its mean
-  /// specific force, then each level axis's constant bias (windowOffset). A period search over
-  /// the window runs on the core's design thread and is taken up kWindowSearchDelay of data later
-  /// (the samples meanwhile wait in the window, outputs held); a window at rest or a bias from a
-  /// file finishes at once.
-  void endCalibrationWindow(double t, CompensatorOutput* out)
+  /// Ends the calibration window at its last sample s: the level frame from its mean specific
+  /// force, then each level axis's constant bias (windowOffset). A period search over the window
+  /// runs on the core's design thread and is taken up kWindowSearchDelay of data later (the
+  /// samples meanwhile wait in the window, each processed as during it, outputs held); a window
+  /// at rest or a bias from a file finishes at once.
+  void endCalibrationWindow(const ImuSample& s, double dt, CompensatorOutput* out)
   {
     bool any_without_orientation = false;
     const Vector3 mean_force = calibration_.meanSpecificForce(&any_without_orientation);
     leveller_.calibrate(mean_force, any_without_orientation);
     window_samples_ = calibration_.samples().size();
-    window_due_ = t;
+    window_due_ = s.t;
     if (!bias_from_file_)
     {
       const auto level = [this](const ImuSample& sample) -> Vector3 { return levelAcceleration(sample); };
@@ -609,10 +615,15 @@ private:
           (*task)();
       }
     }
-    if (window_due_ <= t)
+    if (window_due_ <= s.t)
+    {
       finishCalibration(out);
+    }
     else
+    {
+      *out = process(s, dt);
       holdOutput(out);
+    }
   }
 
   /// A window's period search is under way (endCalibrationWindow).
