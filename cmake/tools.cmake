@@ -42,6 +42,9 @@ if(CATKIN_ENABLE_TESTING)
   # scripts/wave_hindsight.py's lever arm and hindsight FIR on streams of known answer.
   catkin_run_tests_target(pyunit test_wave_hindsight pyunit-test_wave_hindsight.xml
     COMMAND "/usr/bin/python3 ${CMAKE_CURRENT_SOURCE_DIR}/test/bench/test_wave_hindsight.py --xunit ${CATKIN_TEST_RESULTS_DIR}/${PROJECT_NAME}/pyunit-test_wave_hindsight.xml")
+  # scripts/bench_external.py's comparison with the frequency-domain estimate (held outputs).
+  catkin_run_tests_target(pyunit test_bench_external pyunit-test_bench_external.xml
+    COMMAND "/usr/bin/python3 ${CMAKE_CURRENT_SOURCE_DIR}/test/bench/test_bench_external.py --xunit ${CATKIN_TEST_RESULTS_DIR}/${PROJECT_NAME}/pyunit-test_bench_external.xml")
   # The tools' shared command line (parser, header only) and output files: the helper itself,
   # then each tool that writes files run as a program (same file as an input refused, a signal
   # or an unwritable directory leaves nothing behind and names the output).
