@@ -285,8 +285,7 @@ class Bench:
         return wall
 
     def bag_runs(self, seconds, rss):
-        """Floors and compensate_bag on one bag, alternating, the output removed before each run and
-        every run started after a sync (the previous output's writeback does not run beside it)."""
+        """Floors and compensate_bag on one bag, alternating, the output removed before each run."""
         bag = self.bag(seconds)
         log('compensate_bag against a read-only loop on a %d s, 100 Hz bag (%d repetitions)'
             % (seconds, self.bag_reps[seconds]))
@@ -295,7 +294,6 @@ class Bench:
         for _ in range(self.bag_reps[seconds]):
             for label, extra in (('floor', []), ('whole_bag', ['--whole-bag'])):
                 # Timed from outside like the tool (process start and exit included).
-                os.sync()
                 start = time.time()
                 line = self.output([self.exe('bag_read_floor'), '--in', bag] + extra, check=True).stdout
                 wall = time.time() - start
@@ -309,7 +307,6 @@ class Bench:
                                          ('compensate_bag_filtered', ['--outputs', 'filtered'], None)):
                 if os.path.exists(out):
                     os.remove(out)
-                os.sync()
                 wall = float('%.2f' % self.timed([self.exe('compensate_bag'), '--in', bag, '--out', out] + extra,
                                                  sample))
                 runs.append({'label': label, 'fields': {'messages': str(messages), 'wall_s': '%.2f' % wall,
