@@ -111,8 +111,8 @@ WienerHeaveOutput WienerHeave::step(double a, double period, double noise_densit
     decimation_ = std::max(1, static_cast<int>(std::lround(kDesignPeriod / dt_)));
     delay_samples_ = std::lround(kDesignDelay / dt_);
     // The longest FIR's taps (statistics(): lround(span * fs)), rounded as they are: a ceiling
-    // would turn 480 into 481 with the period measured a hair short, and the next reset would
-    // size the rings anew.
+    // makes 481 of a quotient a rounding error above 480 (at 2.8 kHz once the time base's period
+    // is exact), and a reset would then size the rings anew.
     ring_length_ = std::max(1, static_cast<int>(std::lround(kMaxSpan / (decimation_ * dt_))));
     for (int c = 0; c < channels_used_; ++c)
     {
