@@ -544,7 +544,8 @@ def spectral_rows(name, reference, track, variances):
         published = float('nan')
         if variances is not None:
             variance = np.interp(grid[keep], variances[:, 0], variances[:, i + 1])
-            # A point between a held output and a tracking one takes neither's variance.
+            # A point interpolated between a held output and a tracking one is left out too: its
+            # variance is neither's.
             held = np.interp(grid[keep], variances[:, 0], (variances[:, i + 1] >= HELD_VARIANCE).astype(float))
             variance = variance[held == 0.0]
             published = float(np.sqrt(np.mean(variance))) if variance.size else float('nan')
