@@ -17,6 +17,7 @@
 #include <algorithm>
 #include <cmath>
 #include <deque>
+#include <functional>
 #include <future>
 #include <memory>
 #include <stdexcept>
@@ -577,6 +578,12 @@ private:
     return leveller_.levelAcceleration(s, config_.gravity);
   }
 
+  /// levelAcceleration() as the calibration window's functions take it.
+  std::function<Vector3(const ImuSample&)> level()
+  {
+    return [this](const ImuSample& sample) { return levelAcceleration(sample); };
+  }
+
   /// Ends the calibration window at its last sample s: the level frame from its mean specific
   /// force, then each level axis's constant bias (windowOffset). A period search over the window
   /// runs on the core's design thread and is taken up kWindowSearchDelay of data later (the
@@ -587,12 +594,11 @@ private:
     bool any_without_orientation = false;
     const Vector3 mean_force = calibration_.meanSpecificForce(&any_without_orientation);
     leveller_.calibrate(mean_force, any_without_orientation);
-    window_samples_ = calibration_.samples().size();
+    window_end_ = calibration_.samples().size();
     window_due_ = s.t;
     if (!bias_from_file_)
     {
-      const auto level = [this](const ImuSample& sample) -> Vector3 { return levelAcceleration(sample); };
-      const auto axes = std::make_shared<const std::array<std::vector<double>, 3>>(calibration_.levelAxes(level));
+      const auto axes = std::make_shared<const std::array<std::vector<double>, 3>>(calibration_.levelAxes(level()));
       const WindowOffsetOptions options = { config_.assume_static_calibration || config_.mode == Mode::kPaper,
                                             rate_,
                                             config_.min_frequency,
@@ -602,18 +608,13 @@ private:
       if (!options.at_rest)
         window_due_ += kWindowSearchDelay;
       for (int i = 0; i < 3; ++i)
-      {
-        auto task = std::make_shared<std::packaged_task<WindowSearch()>>([axes, options, i] {
-          WindowSearch result;
-          result.offset = windowOffset((*axes)[i], options, &result.frequency);
-          return result;
-        });
-        window_search_[i] = task->get_future().share();
-        if (background_designs_ && !options.at_rest)
-          designInBackground([task] { (*task)(); });
-        else
-          (*task)();
-      }
+        window_search_[i] = designTask(
+            [axes, options, i] {
+              WindowSearch result;
+              result.offset = windowOffset((*axes)[i], options, &result.frequency);
+              return result;
+            },
+            background_designs_ && !options.at_rest);
     }
     if (window_due_ <= s.t)
     {
@@ -642,10 +643,7 @@ private:
       for (int i = 0; i < 3; ++i)
       {
         // Not made yet: the searches still queued are made here meanwhile.
-        while (window_search_[i].wait_for(std::chrono::seconds(0)) != std::future_status::ready && designQueuedHere())
-        {
-        }
-        const WindowSearch& result = window_search_[i].get();
+        const WindowSearch& result = awaitDesign(window_search_[i]);
         if (!bias_from_file_)
         {
           constant_bias_[i] = result.offset;
@@ -659,11 +657,11 @@ private:
     if (config_.mode == Mode::kPaper)
     {
       // The window alone: a paper-mode window is taken up at its last sample.
-      const auto level = [this](const ImuSample& sample) -> Vector3 { return levelAcceleration(sample); };
-      const Vector3 drift = calibration_.constantPositionDrift(level, constant_bias_);
+      const Vector3 drift = calibration_.constantPositionDrift(level(), constant_bias_);
       for (int i = 0; i < 3; ++i)
         axes_[i].constant_d_p = drift[i];
     }
+    const std::size_t window_end = window_end_;  // resetMotion drops it with the replay
     resetMotion();
     // The window's period is known by now: the replay models it from the first sample on, so
     // that no wave motion leaks into the slow channel while the sliding FFT fills up again.
@@ -674,7 +672,7 @@ private:
         axes_[i].frequency = window_frequency[i].frequency;
       }
     replay_ = calibration_.take();
-    window_end_ = window_samples_;
+    window_end_ = window_end;
     replay_.reserve(replayCapacity(window_end_, rate_));
     replayed_ = 0;
     continueReplay(out);
@@ -1005,7 +1003,7 @@ private:
   double force_samples_ = 0.0;
   std::array<ImuSample, kConfirmSamples> held_;    ///< samples held while a jump is confirmed
   std::vector<CalibrationWindow::Sample> replay_;  ///< the ended window's samples and those since
-  std::size_t window_end_ = 0;                     ///< of replay_, the window's
+  std::size_t window_end_ = 0;                     ///< samples of the ended window (of replay_, the first ones)
   std::size_t replayed_ = 0;                       ///< of replay_ processed again
   /// A window's constant bias and dominant frequency (windowOffset).
   struct WindowSearch
@@ -1015,7 +1013,6 @@ private:
   };
   std::array<std::shared_future<WindowSearch>, 3> window_search_;  ///< per level axis, while it runs
   double window_due_ = 0.0;                                        ///< data time at which the search is taken up [s]
-  std::size_t window_samples_ = 0;                                 ///< samples of the ended window
   double rate_ = 0.0;                                              ///< sample rate [Hz] (time_)
   double planned_rate_ = 0.0;                                      ///< rate the FFT windows were planned for [Hz]
   int hop_samples_ = 1;

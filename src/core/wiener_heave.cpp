@@ -1,7 +1,6 @@
 #include "periodic_bias_compensation/core/wiener_heave.h"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <complex>
 #include <stdexcept>
@@ -463,24 +462,16 @@ void WienerHeave::startDesign(double noise_density_squared, long delay)
   if (!transform_.fft)
     transform_.fft = std::make_shared<RealFft>(kDftSize);
   std::shared_ptr<const WienerHeave> copy(new WienerHeave(*this, ForDesign{}));
-  auto task = std::make_shared<std::packaged_task<Outcome()>>(
-      [copy, noise_density_squared] { return copy->design(noise_density_squared); });
-  pending_ = task->get_future().share();
+  pending_ = designTask([copy, noise_density_squared] { return copy->design(noise_density_squared); },
+                        background_ && delay > 0);
   pending_due_ = samples_ + delay;
-  if (background_ && delay > 0)
-    designInBackground([task] { (*task)(); });
-  else
-    (*task)();
 }
 
 void WienerHeave::finishDesign()
 {
   // Not made yet: the designs queued meanwhile (other axes', other instances') are made here
   // while the design thread makes this one.
-  while (pending_.wait_for(std::chrono::seconds(0)) != std::future_status::ready && designQueuedHere())
-  {
-  }
-  const Outcome outcome = pending_.get();
+  const Outcome outcome = awaitDesign(pending_);
   pending_ = {};
   if (!outcome.design)
     return;
