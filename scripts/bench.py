@@ -235,15 +235,18 @@ class Bench:
         return dict(kv.split('=', 1) for kv in r.stdout.decode().split('\0') if '=' in kv)
 
     def nodelet_side_by_side(self):
-        """The compensator and imu_tools' Madgwick nodelet in the same harness, in-process, paced at
-        100 Hz, 1 kHz and 2.8 kHz: latency and the process's CPU time per message."""
+        """The compensator, the harness's own relay and imu_tools' Madgwick nodelet in the same
+        harness, in-process, paced at 100 Hz, 1 kHz and 2.8 kHz: latency and the process's CPU time
+        per message."""
         madgwick = self.madgwick_env()
-        log('nodelet side by side: 100 Hz, 1 kHz, 2.8 kHz' + (' (and Madgwick)' if madgwick else ''))
+        log('nodelet side by side: 100 Hz, 1 kHz, 2.8 kHz, with the relay' + (' and Madgwick' if madgwick else ''))
         runs = []
         for label, rate, seconds in (('100 Hz', 100, self.paced_s[0]), ('1 kHz', 1000, self.paced_s[1]),
                                      ('2.8 kHz', 2800, self.paced_s[2])):
             runs.append(self.nodelet_run(label, 'intra', '--rate', rate, '--duration', seconds,
                                          group='side-by-side'))
+            runs.append(self.nodelet_run(label, 'intra', '--rate', rate, '--duration', seconds,
+                                         '--nodelet', 'relay', group='side-by-side'))
             if madgwick:
                 runs.append(self.nodelet_run(label, 'intra', '--rate', rate, '--duration', seconds,
                                              '--nodelet', 'madgwick', env=madgwick, group='side-by-side'))

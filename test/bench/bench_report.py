@@ -90,10 +90,13 @@ def nodelet_markdown(runs):
     print()
     side = [(r['label'], r['fields']) for r in runs if r.get('group') == 'side-by-side']
     if side:
-        print('Side by side in the same harness, in-process, paced: the compensator and imu_tools\' '
-              'Madgwick filter nodelet (imu_filter_madgwick/ImuFilterNodelet, accelerometer and gyro, '
-              'its imu/data the answer). CPU time per message: the whole process (publisher, callback '
-              'queues and the nodelet) over the messages sent.')
+        print('Side by side in the same harness, in-process, paced: the compensator, the harness\'s '
+              '`relay` (a nodelet that subscribes and publishes as the compensator\'s does and answers '
+              'each input with an empty odometry carrying its stamp: the manager\'s threads and queues '
+              'alone, the floor of any nodelet measured here) and imu_tools\' Madgwick filter nodelet '
+              '(imu_filter_madgwick/ImuFilterNodelet, accelerometer and gyro, its imu/data the answer). '
+              'CPU time per message: the whole process (publisher, callback queues and the nodelet) '
+              'over the messages sent.')
         print()
         print('| nodelet | input | sent | dropped | latency p50 [us] | p99 [us] | max [us] | CPU per message [us] |')
         print('|---|---|---|---|---|---|---|---|')

@@ -4,7 +4,7 @@
 //
 //   nodelet_benchmark --transport intra|tcp --scenario FILE.yaml --rate HZ --duration S
 //                     [--closed-loop] [--stream] [--rss-csv FILE] [--rss-every N]
-//                     [--nodelet compensator|madgwick]
+//                     [--nodelet compensator|madgwick|relay]
 //
 // This program is the nodelet manager: a nodelet::Loader holding BenchSource (below) and, for
 // `intra`, the compensator nodelet loaded through pluginlib as `nodelet load` would. BenchSource
@@ -18,6 +18,10 @@
 // --nodelet madgwick measures imu_tools' Madgwick filter nodelet (imu_filter_madgwick/
 // ImuFilterNodelet, built outside this repository, found through ROS_PACKAGE_PATH) in the same
 // harness, intra-process only: BenchSource then publishes imu/data_raw and times its imu/data.
+// --nodelet relay measures the harness itself: a nodelet (Relay, below) that subscribes and
+// publishes as the compensator's does and answers each imu/data with an odometry/filtered
+// carrying its stamp and nothing else, intra-process only. Its latency and CPU time are what
+// the manager's threads and queues cost with no estimator at all.
 // Output: one line of key=value pairs on stdout.
 #include <algorithm>
 #include <array>
@@ -70,7 +74,7 @@ struct Options
   bool stream = false;
   std::string rss_csv;
   std::int64_t rss_every = 6000;
-  std::string nodelet = "compensator";  ///< the nodelet measured: compensator or madgwick
+  std::string nodelet = "compensator";  ///< the nodelet measured: compensator, madgwick or relay
 };
 
 /// The nodelet measured: its plugin type and the topics it reads and answers on.
@@ -82,11 +86,36 @@ struct Measured
 };
 const Measured kCompensator{ "periodic_bias_compensation/CompensatorNodelet", "imu/data", "odometry/filtered" };
 const Measured kMadgwick{ "imu_filter_madgwick/ImuFilterNodelet", "imu/data_raw", "imu/data" };
+const Measured kRelay{ "bench/Relay", "imu/data", "odometry/filtered" };
 
 const Measured& measured(const Options& o)
 {
-  return o.nodelet == "madgwick" ? kMadgwick : kCompensator;
+  if (o.nodelet == "madgwick")
+    return kMadgwick;
+  return o.nodelet == "relay" ? kRelay : kCompensator;
 }
+
+/// The harness's floor: the compensator nodelet's subscription and publisher (queues, transport
+/// hints, a shared pointer published from the callback) with an empty odometry as the answer.
+class Relay : public nodelet::Nodelet
+{
+  void onInit() override
+  {
+    ros::NodeHandle nh = getNodeHandle();
+    pub_ = nh.advertise<nav_msgs::Odometry>(kRelay.output, 200);
+    sub_ = nh.subscribe(kRelay.input, 1000, &Relay::imuCallback, this, ros::TransportHints().tcpNoDelay());
+  }
+
+  void imuCallback(const sensor_msgs::Imu::ConstPtr& imu)
+  {
+    auto odometry = boost::make_shared<nav_msgs::Odometry>();
+    odometry->header = imu->header;
+    pub_.publish(odometry);
+  }
+
+  ros::Publisher pub_;
+  ros::Subscriber sub_;
+};
 
 /// Latency histogram with constant memory: bins of 1/100 decade from 1 ns to 100 s.
 class Histogram
@@ -396,7 +425,7 @@ private:
 const char* kUsage =
     "usage: nodelet_benchmark --transport intra|tcp --scenario FILE.yaml --rate HZ --duration S\n"
     "                         [--closed-loop] [--stream] [--rss-csv FILE] [--rss-every N]\n"
-    "                         [--nodelet compensator|madgwick]\n";
+    "                         [--nodelet compensator|madgwick|relay]\n";
 
 /// The options, or nothing after --help.
 std::optional<Options> parseOptions(int argc, char** argv)
@@ -416,8 +445,8 @@ std::optional<Options> parseOptions(int argc, char** argv)
     return std::nullopt;
   if ((o.transport != "intra" && o.transport != "tcp") || o.scenario.empty() || !(o.rate > 0.0) || !(o.duration > 0.0))
     throw pbc::UsageError("--transport intra|tcp, --scenario, --rate > 0 and --duration > 0 are required");
-  if (o.nodelet != "compensator" && (o.nodelet != "madgwick" || o.transport != "intra"))
-    throw pbc::UsageError("--nodelet is compensator or madgwick (madgwick with --transport intra only)");
+  if (o.nodelet != "compensator" && ((o.nodelet != "madgwick" && o.nodelet != "relay") || o.transport != "intra"))
+    throw pbc::UsageError("--nodelet is compensator, madgwick or relay (the last two with --transport intra only)");
   return o;
 }
 }  // namespace
@@ -446,6 +475,10 @@ int main(int argc, char** argv)
       if (type == "bench/BenchSource")
       {
         return source;
+      }
+      if (type == kRelay.type)
+      {
+        return boost::make_shared<Relay>();
       }
       return plugins.createInstance(type);
     });

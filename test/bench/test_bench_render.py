@@ -92,10 +92,12 @@ class RenderTest(unittest.TestCase):
         runs = results['sections']['nodelet']['runs']
         base = dict(runs[0]['fields'], p50_us='111', p99_us='222', max_us='333', cpu_us_per_msg='4.56')
         runs += [{'label': '2.8 kHz', 'group': 'side-by-side', 'fields': dict(base, nodelet='compensator')},
+                 {'label': '2.8 kHz', 'group': 'side-by-side', 'fields': dict(base, nodelet='relay', p50_us='55')},
                  {'label': '2.8 kHz', 'group': 'side-by-side', 'fields': dict(base, nodelet='madgwick', dropped='7')}]
         md = render(results)
         self.assertIn('| compensator | 2.8 kHz | %s | %s | 111 | 222 | 333 | 4.6 |' % (base['sent'], base['dropped']), md)
         self.assertIn('| madgwick | 2.8 kHz | %s | 7 | 111 | 222 | 333 | 4.6 |' % base['sent'], md)
+        self.assertIn('| relay | 2.8 kHz | %s | %s | 55 | 222 | 333 | 4.6 |' % (base['sent'], base['dropped']), md)
         self.assertNotIn('Madgwick not measured', md)
         # The side-by-side runs stay out of the transport table.
         self.assertNotIn('| intra | 2.8 kHz |', md)
