@@ -197,7 +197,10 @@ public:
                                config.heave_corner_frequency != config_.heave_corner_frequency ||
                                config.min_frequency != config_.min_frequency;
     if (config.lever_arm != config_.lever_arm)
+    {
       lever_.setOffset(config.lever_arm);
+      lever_at_window_.setOffset(config.lever_arm);
+    }
     config_ = config;
     if (restart_heave)
       for (AxisEstimator& axis : axes_)
@@ -360,6 +363,8 @@ public:
     }
     else if (needsCalibration())
     {
+      if (calibration_.empty())
+        lever_at_window_ = lever_;
       if (calibration_.add(s, dt, config_.calibration_duration) && planned_rate_ > 0.0)
       {
         endCalibrationWindow(s, dt, &output);
@@ -671,6 +676,9 @@ private:
         axes_[i].locked = true;
         axes_[i].frequency = window_frequency[i].frequency;
       }
+    // The lever arm's tilt means are no part of the calibration: they go over the replayed
+    // samples again from where they stood at the window's first, so they see each one once.
+    lever_ = lever_at_window_;
     replay_ = calibration_.take();
     window_end_ = window_end;
     replay_.reserve(replayCapacity(window_end_, rate_));
@@ -1022,7 +1030,8 @@ private:
   TurnDetector turns_;               ///< turns told from the yaw a sea induces (wave estimate)
 
   Leveller leveller_;
-  LeverArm lever_;  ///< the IMU's offset taken off the wave outputs
+  LeverArm lever_;            ///< the IMU's offset taken off the wave outputs
+  LeverArm lever_at_window_;  ///< lever_ before the calibration window's first sample
 
   bool background_designs_ = true;  ///< setBackgroundDesigns
   bool calibrated_ = false;
