@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <string>
 
 #include "periodic_bias_compensation/core/compensator.h"
 #include "periodic_bias_compensation/core/lever_arm.h"
@@ -277,54 +278,62 @@ TEST(Compensator, TheConfiguredWaveBandHoldsWithoutACalibrationWindow)
   }
 }
 
-// The calibration window's period search runs on the core's design thread and is taken up a set
-// time of data later: the outputs are those of the search made in the sample's call, and a
-// reset or recalibration while it runs starts a window of its own that ends as any other.
 // The calibration window's samples are processed a second time once its bias is known (the
 // replay); the lever arm's tilt means must still have seen each sample once: what the offset
 // takes off the wave outputs is a single pass of LeverArm over the stream's attitudes.
 TEST(Compensator, TheLeverArmSeesTheCalibrationWindowOnce)
 {
   const Vector3 offset(-5.0, 1.0, 4.0);
-  CompensatorConfig with_arm = modeConfig(Mode::kDefault);
-  with_arm.lever_arm = offset;
   const CompensatorConfig without = modeConfig(Mode::kDefault);
+  CompensatorConfig with_arm = without;
+  with_arm.lever_arm = offset;
   const double rate = 100.0;
   const auto attitude = [](double t) {
     // A standing heel and trim under the waves' roll and pitch.
     return Eigen::Quaterniond(Eigen::AngleAxisd(0.03 + 0.05 * std::sin(2.0 * M_PI * t / 9.0), Vector3::UnitX()) *
                               Eigen::AngleAxisd(-0.02 + 0.04 * std::sin(2.0 * M_PI * t / 7.0 + 1.0), Vector3::UnitY()));
   };
-  Compensator arm(with_arm), plain(without);
-  pbc::LeverArm once(offset);
-  int compared = 0;
-  for (int k = 0; k < static_cast<int>(60 * rate); ++k)
+  // Configured from the start, and set during the window (the replay then goes over the whole
+  // window with it, as a single pass from the window's first sample).
+  for (const bool set_in_window : { false, true })
   {
-    const double t = k / rate;
-    pbc::ImuSample s;
-    s.t = 100.0 + t;
-    s.orientation = attitude(t);
-    s.has_orientation = true;
-    s.specific_force = s.orientation.inverse() * Vector3(0.0, 0.0, pbc::kStandardGravity + 0.3 * std::sin(1.1 * t));
-    CompensatorOutput a, b;
-    arm.addSample(s, &a);
-    plain.addSample(s, &b);
-    const pbc::LeverArmOutput expected = once.update(s.orientation, k > 0 ? 1.0 / rate : 0.0);
-    ASSERT_EQ(a.state, b.state) << "at " << t << " s";
-    if (a.state != pbc::OutputState::kTracking || a.position_wave == Vector3::Zero())
-      continue;  // held
-    for (int i = 0; i < 3; ++i)
+    Compensator arm(set_in_window ? without : with_arm), plain(without);
+    pbc::LeverArm once(offset);
+    int compared = 0;
+    for (int k = 0; k < static_cast<int>(60 * rate); ++k)
     {
-      ASSERT_NEAR(b.position_wave[i] - a.position_wave[i], expected.position[i], 1e-9)
-          << "axis " << i << " at " << t << " s";
-      ASSERT_NEAR(b.velocity_wave[i] - a.velocity_wave[i], expected.velocity[i], 1e-9)
-          << "axis " << i << " at " << t << " s";
+      const double t = k / rate;
+      std::string why;
+      if (set_in_window && k == static_cast<int>(5 * rate))
+        ASSERT_TRUE(arm.setConfig(with_arm, &why)) << why;
+      pbc::ImuSample s;
+      s.t = 100.0 + t;
+      s.orientation = attitude(t);
+      s.has_orientation = true;
+      s.specific_force = s.orientation.inverse() * Vector3(0.0, 0.0, pbc::kStandardGravity + 0.3 * std::sin(1.1 * t));
+      CompensatorOutput a, b;
+      arm.addSample(s, &a);
+      plain.addSample(s, &b);
+      const pbc::LeverArmOutput expected = once.update(s.orientation, k > 0 ? 1.0 / rate : 0.0);
+      ASSERT_EQ(a.state, b.state) << "at " << t << " s";
+      if (a.state != pbc::OutputState::kTracking || a.position_wave == Vector3::Zero())
+        continue;  // held
+      for (int i = 0; i < 3; ++i)
+      {
+        ASSERT_NEAR(b.position_wave[i] - a.position_wave[i], expected.position[i], 1e-9)
+            << "axis " << i << " at " << t << " s" << (set_in_window ? ", set in the window" : "");
+        ASSERT_NEAR(b.velocity_wave[i] - a.velocity_wave[i], expected.velocity[i], 1e-9)
+            << "axis " << i << " at " << t << " s" << (set_in_window ? ", set in the window" : "");
+      }
+      ++compared;
     }
-    ++compared;
+    EXPECT_GT(compared, static_cast<int>(40 * rate));
   }
-  EXPECT_GT(compared, static_cast<int>(40 * rate));
 }
 
+// The calibration window's period search runs on the core's design thread and is taken up a set
+// time of data later: the outputs are those of the search made in the sample's call, and a
+// reset or recalibration while it runs starts a window of its own that ends as any other.
 TEST(Compensator, TheWindowsPeriodSearchTakenUpLaterChangesNoOutput)
 {
   const CompensatorConfig config = modeConfig(Mode::kDefault);
