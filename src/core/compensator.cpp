@@ -357,8 +357,7 @@ public:
       }
       else
       {
-        output = process(s, dt);
-        holdOutput(&output);
+        output = processHeld(s, dt);
       }
     }
     else if (needsCalibration())
@@ -373,9 +372,8 @@ public:
       {
         // Until the bias and level are known the double integral swings with whatever the
         // provisional bias leaves: nothing is claimed, the motion is held at zero.
-        output = process(s, dt);
+        output = processHeld(s, dt);
         calibration_.noteLevel(level_);
-        holdOutput(&output);
       }
     }
     else
@@ -455,6 +453,15 @@ public:
   }
 
 private:
+  /// process() of a sample whose output is held (the calibration window and the samples that
+  /// wait for its search).
+  CompensatorOutput processHeld(const ImuSample& s, double dt)
+  {
+    CompensatorOutput out = process(s, dt);
+    holdOutput(&out);
+    return out;
+  }
+
   static void holdOutput(CompensatorOutput* out)
   {
     out->state = OutputState::kCalibrating;
@@ -627,8 +634,7 @@ private:
     }
     else
     {
-      *out = process(s, dt);
-      holdOutput(out);
+      *out = processHeld(s, dt);
     }
   }
 
