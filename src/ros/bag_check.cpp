@@ -350,7 +350,12 @@ std::string checkStructure(const std::string& path, bool read_chunks)
       chunk = ChunkLayout();
       chunk.present = true;
       chunk.walked = walk_chunk;
-      chunk.uncompressed_size = fields.size.size() == 4 ? u32(fields.size.data()) : 0;
+      // An uncompressed chunk's records are its data, whatever its size field says (rosbag reads
+      // the data length): without reading them, index entries are bounded by the same bytes that
+      // the whole-file check walks.
+      chunk.uncompressed_size = fields.compression == "none" ? data_length
+                                : fields.size.size() == 4    ? u32(fields.size.data())
+                                                             : 0;
       if (walk_chunk)
       {
         why = walkChunk(data, position, &chunk);
