@@ -111,9 +111,9 @@ CompensatorRos::CompensatorRos(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh
     tf_broadcaster_ = std::make_unique<tf2_ros::TransformBroadcaster>();
   }
 
-  filtered_pub_ = nh_.advertise<nav_msgs::Odometry>("odometry/filtered", 200);
-  wave_pub_ = nh_.advertise<nav_msgs::Odometry>("odometry/wave", 200);
-  bias_pub_ = nh_.advertise<BiasState>("bias_state", 200);
+  filtered_pub_ = nh_.advertise<nav_msgs::Odometry>("odometry/filtered", kOutputQueue);
+  wave_pub_ = nh_.advertise<nav_msgs::Odometry>("odometry/wave", kOutputQueue);
+  bias_pub_ = nh_.advertise<BiasState>("bias_state", kOutputQueue);
   path_filtered_pub_ = nh_.advertise<nav_msgs::Path>("path/filtered", 1, true);
   path_raw_pub_ = nh_.advertise<nav_msgs::Path>("path/raw", 1, true);
 
@@ -130,9 +130,7 @@ CompensatorRos::CompensatorRos(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh
   reconfigure_server_ = std::make_unique<dynamic_reconfigure::Server<TuningConfig>>(mutex_, pnh_);
   reconfigure_server_->setCallback([this](TuningConfig& config, uint32_t level) { reconfigure(config, level); });
 
-  // A deep queue: every dropped sample is a gap for the integration (1000 samples are 10 s at
-  // 100 Hz, enough to ride out a stall or a bag replayed faster than real time).
-  imu_sub_ = nh_.subscribe("imu/data", 1000, &CompensatorRos::imuCallback, this, ros::TransportHints().tcpNoDelay());
+  imu_sub_ = nh_.subscribe("imu/data", kImuQueue, &CompensatorRos::imuCallback, this, imuTransport());
   ROS_INFO("bias compensation (%s mode) listening on %s, publishing %s and %s", toString(params_.core.mode).c_str(),
            imu_sub_.getTopic().c_str(), filtered_pub_.getTopic().c_str(), wave_pub_.getTopic().c_str());
 }

@@ -49,6 +49,7 @@
 #include <unistd.h>
 #include <pluginlib/class_loader.hpp>
 
+#include "periodic_bias_compensation/ros/compensator_ros.h"
 #include "periodic_bias_compensation/ros/sim_messages.h"
 #include "periodic_bias_compensation/sim/simulator.h"
 #include "periodic_bias_compensation/tools/command_line.h"
@@ -102,8 +103,9 @@ class Relay : public nodelet::Nodelet
   void onInit() override
   {
     ros::NodeHandle nh = getNodeHandle();
-    pub_ = nh.advertise<nav_msgs::Odometry>(kRelay.output, 200);
-    sub_ = nh.subscribe(kRelay.input, 1000, &Relay::imuCallback, this, ros::TransportHints().tcpNoDelay());
+    pub_ = nh.advertise<nav_msgs::Odometry>(kRelay.output, pbc::CompensatorRos::kOutputQueue);
+    sub_ = nh.subscribe(kRelay.input, pbc::CompensatorRos::kImuQueue, &Relay::imuCallback, this,
+                        pbc::CompensatorRos::imuTransport());
   }
 
   void imuCallback(const sensor_msgs::Imu::ConstPtr& imu)

@@ -45,6 +45,18 @@ public:
   CompensatorRos(const CompensatorRos&) = delete;
   CompensatorRos& operator=(const CompensatorRos&) = delete;
 
+  /// The queue of the imu/data subscription. Deep: every dropped sample is a gap for the
+  /// integration (1000 samples are 10 s at 100 Hz, enough to ride out a stall or a bag replayed
+  /// faster than real time).
+  static constexpr std::uint32_t kImuQueue = 1000;
+  /// The queue of each per-sample publisher (odometry/filtered, odometry/wave, bias_state).
+  static constexpr std::uint32_t kOutputQueue = 200;
+  /// How imu/data is subscribed: over TCP without Nagle's delay (a sample is a small message).
+  static ros::TransportHints imuTransport()
+  {
+    return ros::TransportHints().tcpNoDelay();
+  }
+
 private:
   /// Counters kept by the wrapper on top of the core's CompensatorCounters.
   struct WrapperCounters
