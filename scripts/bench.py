@@ -397,10 +397,25 @@ class Bench:
         return {'duration': duration, 'wall_s': float(wall), 'max_rss_kb': int(kb)}
 
 
+def read_text(path):
+    try:
+        with open(path) as f:
+            return f.read().strip()
+    except OSError:
+        return None
+
+
 def machine():
+    """The CPU model (with how an idle core waits, which sets the wake-up latency that the nodelet
+    tables hold) and the number of cores."""
     model = re.search(r'^Model name:\s*(.*)$', subprocess.run(['lscpu'], stdout=subprocess.PIPE,
                                                                 universal_newlines=True).stdout, re.M)
-    return model.group(1).strip() if model else 'unknown CPU', os.cpu_count()
+    described = model.group(1).strip() if model else 'unknown CPU'
+    idle = read_text('/sys/devices/system/cpu/cpuidle/current_driver')
+    if idle:
+        poll = read_text('/sys/module/haltpoll/parameters/guest_halt_poll_ns')
+        described += ' (cpuidle driver %s%s)' % (idle, ', guest halt polling %s ns' % poll if poll is not None else '')
+    return described, os.cpu_count()
 
 
 def loadavg():
