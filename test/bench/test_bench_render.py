@@ -99,6 +99,16 @@ class RenderTest(unittest.TestCase):
         self.assertIn('| madgwick | 2.8 kHz | %s | 7 | 111 | 222 | 333 | 4.6 |' % base['sent'], md)
         self.assertIn('| relay | 2.8 kHz | %s | %s | 55 | 222 | 333 | 4.6 |' % (base['sent'], base['dropped']), md)
         self.assertNotIn('Madgwick not measured', md)
+        # Whether the fastest runs cover the start-up alone is said from their length.
+        long_runs = dict(base, sent=str(int(40 * float(base['input_rate']))))
+        short_runs = dict(base, sent=str(int(10 * float(base['input_rate']))))
+        for fields, said in ((long_runs, 'The 2.8 kHz runs last 40 s, past the calibration window'),
+                             (short_runs, 'The 2.8 kHz runs last 10 s: the start-up (calibration window, first '
+                                          'designs) alone.')):
+            timed = copy.deepcopy(results)
+            for run in timed['sections']['nodelet']['runs'][-3:]:
+                run['fields'].update(sent=fields['sent'])
+            self.assertIn(said, render(timed))
         # The side-by-side runs stay out of the transport table.
         self.assertNotIn('| intra | 2.8 kHz |', md)
         self.assertIn('Madgwick not measured', render(dict(results, sections=dict(
