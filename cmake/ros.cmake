@@ -90,6 +90,10 @@ if(CATKIN_ENABLE_TESTING)
   add_dependencies(test_ros_conversions ${PROJECT_NAME}_gencfg)
   target_compile_definitions(test_ros_conversions PRIVATE PBC_SOURCE_DIR="${CMAKE_CURRENT_SOURCE_DIR}")
 
+  # The bag writer's file, direct and ordinary writes, read back by rosbag (no master).
+  catkin_add_gtest(test_bag_writer test/ros/bag_writer_test.cpp)
+  target_link_libraries(test_bag_writer ${PROJECT_NAME}_ros ${catkin_LIBRARIES})
+
   # compensate_bag end to end on the bench bag, the batch runs of docs/batch.md, and its error
   # paths (no master).
   catkin_add_gtest(test_compensate_bag test/ros/compensate_bag_test.cpp)

@@ -2,8 +2,12 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <cstdlib>
 #include <cstring>
 #include <stdexcept>
+
+#include <fcntl.h>
+#include <unistd.h>
 
 #include <bzlib.h>
 #include <roslz4/lz4s.h>
@@ -20,6 +24,10 @@ constexpr std::uint32_t kFileHeaderLength = 4096;  ///< header + padding of the 
 constexpr std::uint32_t kIndexVersion = 1, kChunkInfoVersion = 1;
 constexpr int kLz4BlockSizeId = 6;  ///< as rosbag's LZ4 stream
 constexpr int kBz2BlockSize = 9, kBz2WorkFactor = 30;
+/// Alignment of a direct write's buffer, offset and length: the page size, a multiple of every
+/// device's logical block size.
+constexpr std::size_t kDirectAlignment = 4096;
+static_assert(BagWriter::kBlockSize % kDirectAlignment == 0);
 
 void appendU32(std::vector<std::uint8_t>* out, std::uint32_t value)
 {
@@ -109,17 +117,27 @@ void appendConnectionRecord(std::vector<std::uint8_t>* out, std::uint32_t id, co
 constexpr std::uint32_t kMessageHeaderLength = (4 + 5 + 4) + (4 + 3 + 1) + (4 + 5 + 8);
 }  // namespace
 
-BagWriter::BagWriter(const std::string& path, Compression compression, bool background, std::uint32_t chunk_threshold)
+BagWriter::BagWriter(const std::string& path, Compression compression, bool background, std::uint32_t chunk_threshold,
+                     bool direct_io)
   : path_(path), compression_(compression), chunk_threshold_(std::max<std::uint32_t>(chunk_threshold, 1))
 {
-  file_ = std::fopen(path.c_str(), "wb");
-  if (file_ == nullptr)
+  fd_ = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
+  if (fd_ < 0)
   {
     throw std::runtime_error("cannot create " + path + ": " + std::strerror(errno));
   }
+  // File systems without direct I/O (tmpfs before Linux 6.6, some network ones) refuse the flag.
+  void* block = nullptr;
+  const int flags = ::fcntl(fd_, F_GETFL);
+  if (direct_io && flags >= 0 && ::posix_memalign(&block, kDirectAlignment, kBlockSize) == 0)
+  {
+    block_.reset(static_cast<std::uint8_t*>(block));
+    direct_ = direct_granted_ = ::fcntl(fd_, F_SETFL, flags | O_DIRECT) == 0;
+  }
   chunk_.data.reserve(chunk_threshold_ + 64 * 1024);
   writeBytes(kMagic, sizeof kMagic - 1);
-  writeFileHeader(0);
+  const std::vector<std::uint8_t> header = fileHeader(0);
+  writeBytes(header.data(), header.size());
   if (background)
   {
     thread_ = std::make_unique<WorkThread<Chunk>>(
@@ -130,10 +148,15 @@ BagWriter::BagWriter(const std::string& path, Compression compression, bool back
 BagWriter::~BagWriter()
 {
   thread_.reset();  // what waits is dropped: the file is incomplete without close() anyway
-  if (file_ != nullptr)
+  if (fd_ >= 0)
   {
-    std::fclose(file_);
+    ::close(fd_);
   }
+}
+
+void BagWriter::FreeBlock::operator()(std::uint8_t* block) const
+{
+  std::free(block);
 }
 
 const char* BagWriter::toString(Compression compression)
@@ -323,7 +346,7 @@ void BagWriter::storeChunk(Chunk* chunk)
   chunk->messages = 0;
 }
 
-void BagWriter::writeFileHeader(std::uint64_t index_position)
+std::vector<std::uint8_t> BagWriter::fileHeader(std::uint64_t index_position) const
 {
   std::vector<std::uint8_t> header;
   appendField(&header, "chunk_count", static_cast<std::uint32_t>(chunks_.size()));
@@ -336,12 +359,12 @@ void BagWriter::writeFileHeader(std::uint64_t index_position)
   const std::uint32_t padding = kFileHeaderLength - static_cast<std::uint32_t>(header.size());
   appendU32(&record, padding);
   record.resize(record.size() + padding, ' ');
-  writeBytes(record.data(), record.size());
+  return record;
 }
 
 void BagWriter::close()
 {
-  if (file_ == nullptr)
+  if (fd_ < 0)
   {
     return;
   }
@@ -375,25 +398,117 @@ void BagWriter::close()
     }
   }
   writeBytes(records.data(), records.size());
-  if (std::fseek(file_, sizeof kMagic - 1, SEEK_SET) != 0)
+  // The whole blocks past the page cache, the tail (not a whole block) and the final file header
+  // (over the first one) as ordinary writes.
+  if (direct_)
   {
-    throw std::runtime_error("cannot write " + path_ + ": " + std::strerror(errno));
+    const std::size_t whole = block_used_ - block_used_ % kDirectAlignment;
+    const std::size_t tail = block_used_ - whole;
+    block_used_ = whole;
+    if (whole > 0)
+    {
+      writeBlock();
+    }
+    stopDirectIo();
+    writeAll(block_.get() + whole, tail);
   }
-  writeFileHeader(index_position);
-  std::FILE* file = file_;
-  file_ = nullptr;
-  if (std::fclose(file) != 0)
+  const std::vector<std::uint8_t> header = fileHeader(index_position);
+  if (::pwrite(fd_, header.data(), header.size(), sizeof kMagic - 1) != static_cast<ssize_t>(header.size()))
   {
-    throw std::runtime_error("cannot write " + path_ + ": " + std::strerror(errno));
+    fail("write");
+  }
+  const int fd = fd_;
+  fd_ = -1;
+  if (::close(fd) != 0)
+  {
+    fail("write");
   }
 }
 
 void BagWriter::writeBytes(const void* data, std::size_t size)
 {
-  if (size > 0 && std::fwrite(data, 1, size, file_) != size)
-  {
-    throw std::runtime_error("cannot write " + path_ + ": " + std::strerror(errno));
-  }
   position_ += size;
+  const auto* bytes = static_cast<const std::uint8_t*>(data);
+  while (direct_ && size > 0)
+  {
+    const std::size_t n = std::min(size, kBlockSize - block_used_);
+    std::memcpy(block_.get() + block_used_, bytes, n);
+    block_used_ += n;
+    bytes += n;
+    size -= n;
+    if (block_used_ == kBlockSize)
+    {
+      writeBlock();
+    }
+  }
+  writeAll(bytes, size);
+}
+
+void BagWriter::writeBlock()
+{
+  const std::uint8_t* data = block_.get();
+  std::size_t size = block_used_;
+  block_used_ = 0;
+  while (direct_ && size > 0)
+  {
+    const ssize_t written = ::write(fd_, data, size);
+    if (written > 0)
+    {
+      data += written;
+      size -= static_cast<std::size_t>(written);
+    }
+    else if (written < 0 && errno == EINVAL)
+    {
+      // Refused by the device or file system, or a short write left the offset unaligned.
+      stopDirectIo();
+      direct_granted_ = false;
+    }
+    else if (written < 0 && errno != EINTR)
+    {
+      fail("write");
+    }
+  }
+  writeAll(data, size);
+}
+
+void BagWriter::writeAll(const std::uint8_t* data, std::size_t size)
+{
+  while (size > 0)
+  {
+    const ssize_t written = ::write(fd_, data, size);
+    if (written < 0 && errno == EINTR)
+    {
+      continue;
+    }
+    if (written <= 0)
+    {
+      if (written == 0)
+      {
+        errno = EIO;  // no progress and no error: not to loop forever
+      }
+      fail("write");
+    }
+    data += written;
+    size -= static_cast<std::size_t>(written);
+  }
+}
+
+void BagWriter::stopDirectIo()
+{
+  if (!direct_)
+  {
+    return;
+  }
+  direct_ = false;
+  const int flags = ::fcntl(fd_, F_GETFL);
+  if (flags < 0 || ::fcntl(fd_, F_SETFL, flags & ~O_DIRECT) != 0)
+  {
+    fail("write");
+  }
+}
+
+void BagWriter::fail(const char* what) const
+{
+  throw std::runtime_error(std::string("cannot ") + what + " " + path_ + ": " + std::strerror(errno));
 }
 }  // namespace periodic_bias_compensation

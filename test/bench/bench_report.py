@@ -208,8 +208,9 @@ def bag_markdown(bags, core_rows):
               'rate above) accounts for %.2f s of its %.2f s (%.0f %%), reading the whole bag for %.2f s (%.0f %%); '
               'the rest is the structure pre-check (one more read of the file), building the three output messages '
               'and appending six records per IMU sample (three outputs, three ground-truth messages copied as '
-              'bytes) to in-memory chunks written with one call each (`BagWriter`); with `--compression lz4` the '
-              'chunks are also compressed, by a thread of the writer.' % (
+              'bytes) to in-memory chunks, written by a thread of the writer (`BagWriter`) past the page cache in '
+              '4 MiB blocks (direct I/O, where the file system allows it); with `--compression lz4` that thread '
+              'also compresses them.' % (
                   bags[-1]['seconds'], core_s, wall['compensate_bag'], 100 * core_s / wall['compensate_bag'],
                   wall.get('whole_bag', float('nan')),
                   100 * wall.get('whole_bag', float('nan')) / wall['compensate_bag']))

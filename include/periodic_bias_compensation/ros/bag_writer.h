@@ -6,6 +6,10 @@
 // compressed and written by a thread of the writer's own while the next one fills (at most two
 // chunks wait), so compression and file writes overlap the caller's work.
 //
+// The file is written past the page cache (O_DIRECT, in aligned blocks of kBlockSize) where the
+// file system allows it: the kernel then copies nothing, and gigabytes of output do not evict
+// what the machine's other programs have cached. Where it does not, the writes are ordinary ones.
+//
 //   BagWriter out(path, BagWriter::Compression::kNone);
 //   const std::uint32_t odom = out.addConnection<nav_msgs::Odometry>("/odometry/filtered");
 //   out.write(odom, stamp, message);
@@ -15,7 +19,6 @@
 #pragma once
 
 #include <cstdint>
-#include <cstdio>
 #include <map>
 #include <memory>
 #include <string>
@@ -42,11 +45,15 @@ public:
 
   /// rosbag's own chunk size (rosbag::Bag's default chunk threshold).
   static constexpr std::uint32_t kDefaultChunkThreshold = 768 * 1024;
+  /// Bytes gathered before a write past the page cache (a multiple of any device's block size).
+  static constexpr std::size_t kBlockSize = 4 << 20;
 
   /// Creates (truncates) `path` and writes the bag's file header. `background`: chunks are
   /// compressed and written by a thread (an error there is thrown by the next write() or close()).
+  /// `direct_io`: past the page cache where the file system allows it (false: ordinary writes;
+  /// the file's bytes are the same either way).
   BagWriter(const std::string& path, Compression compression, bool background = false,
-            std::uint32_t chunk_threshold = kDefaultChunkThreshold);
+            std::uint32_t chunk_threshold = kDefaultChunkThreshold, bool direct_io = true);
   /// Closes the file without writing the index if close() was not called (the file is then
   /// incomplete: the caller removes it).
   ~BagWriter();
@@ -81,6 +88,13 @@ public:
 
   /// Appends a message already serialised (`size` bytes at `data`), copied as they are.
   void write(std::uint32_t connection, const ros::Time& time, const std::uint8_t* data, std::uint32_t size);
+
+  /// Whether the file was written past the page cache (asked after close(); a refused direct
+  /// write turns it off for the rest of the file).
+  bool directIo() const
+  {
+    return direct_granted_;
+  }
 
   /// Writes the last chunk, the index (connection and chunk info records) and the final file
   /// header, and closes the file.
@@ -121,11 +135,29 @@ private:
   void finishChunk();
   /// Compresses and writes a chunk and its index records (in the thread, if there is one).
   void storeChunk(Chunk* chunk);
-  void writeFileHeader(std::uint64_t index_position);
+  std::vector<std::uint8_t> fileHeader(std::uint64_t index_position) const;
+  /// Appends to the file (through the block buffer while the writes are direct).
   void writeBytes(const void* data, std::size_t size);
+  /// Writes the whole block buffer past the page cache (or, where refused, as ordinary writes).
+  void writeBlock();
+  /// Writes `size` bytes at the file's offset, all of them; throws on an error.
+  void writeAll(const std::uint8_t* data, std::size_t size);
+  /// Ordinary writes from now on: the file system or device refused an aligned direct one, or
+  /// close() writes the unaligned tail.
+  void stopDirectIo();
+  [[noreturn]] void fail(const char* what) const;
+
+  struct FreeBlock
+  {
+    void operator()(std::uint8_t* block) const;
+  };
 
   std::string path_;
-  std::FILE* file_ = nullptr;
+  int fd_ = -1;
+  bool direct_ = false;                             ///< the writes are direct now
+  bool direct_granted_ = false;                     ///< the file system allows them, and none was refused
+  std::unique_ptr<std::uint8_t, FreeBlock> block_;  ///< kBlockSize bytes, aligned, while direct_
+  std::size_t block_used_ = 0;
   Compression compression_;
   std::uint32_t chunk_threshold_;
   std::vector<Connection> connections_;
