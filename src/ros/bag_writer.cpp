@@ -133,6 +133,10 @@ BagWriter::BagWriter(const std::string& path, Compression compression, bool back
   {
     block_.reset(static_cast<std::uint8_t*>(block));
     direct_ = direct_granted_ = ::fcntl(fd_, F_SETFL, flags | O_DIRECT) == 0;
+    if (!direct_)
+    {
+      block_.reset();
+    }
   }
   chunk_.data.reserve(chunk_threshold_ + 64 * 1024);
   writeBytes(kMagic, sizeof kMagic - 1);
@@ -413,8 +417,13 @@ void BagWriter::close()
     writeAll(block_.get() + whole, tail);
   }
   const std::vector<std::uint8_t> header = fileHeader(index_position);
-  if (::pwrite(fd_, header.data(), header.size(), sizeof kMagic - 1) != static_cast<ssize_t>(header.size()))
+  const ssize_t written = ::pwrite(fd_, header.data(), header.size(), sizeof kMagic - 1);
+  if (written != static_cast<ssize_t>(header.size()))
   {
+    if (written >= 0)
+    {
+      errno = EIO;  // a short write of 4 kB where the file already holds them
+    }
     fail("write");
   }
   const int fd = fd_;
@@ -463,9 +472,9 @@ void BagWriter::writeBlock()
       stopDirectIo();
       direct_granted_ = false;
     }
-    else if (written < 0 && errno != EINTR)
+    else if (written == 0 || errno != EINTR)
     {
-      fail("write");
+      break;  // writeAll() says why
     }
   }
   writeAll(data, size);
