@@ -25,6 +25,12 @@ void WienerHeave::setMinFrequency(double min_frequency)
   reset();
 }
 
+void WienerHeave::setMaxPhases(int max_phases)
+{
+  max_phases_ = std::max(1, max_phases);
+  reset();
+}
+
 void WienerHeave::reset()
 {
   dt_ = sized_dt_ = 0.0;
@@ -42,6 +48,9 @@ void WienerHeave::reset()
   }
   ring_length_ = 0;
   newest_ = 0;
+  phases_ = 0;
+  ring_of_phase_.clear();
+  carried_ = Carried();
   since_design_ = 0.0;
   since_manoeuvre_ = since_gap_ = std::numeric_limits<double>::infinity();
   current_.reset();
@@ -113,11 +122,16 @@ WienerHeaveOutput WienerHeave::step(double a, double period, double noise_densit
     // makes 481 of a quotient a rounding error above 480 (at 2.8 kHz once the time base's period
     // is exact), and a reset would then size the rings anew.
     ring_length_ = std::max(1, static_cast<int>(std::lround(kMaxSpan / (decimation_ * dt_))));
+    // Kept phases spread evenly over the period; all of them up to kMaxPhases.
+    phases_ = std::min(decimation_, max_phases_);
+    ring_of_phase_.assign(decimation_, -1);
+    for (int ring = 0; ring < phases_; ++ring)
+      ring_of_phase_[static_cast<long>(ring) * decimation_ / phases_] = ring;
     for (int c = 0; c < channels_used_; ++c)
     {
       channels_[c].first.assign(decimation_, 0.0);
       channels_[c].second.assign(decimation_, 0.0);
-      const size_t history = static_cast<size_t>(ring_length_) * decimation_;
+      const size_t history = static_cast<size_t>(ring_length_) * phases_;
       if (channels_[c].history.size() != history)
         channels_[c].history = ZeroedBuffer(history);
     }
@@ -144,8 +158,10 @@ WienerHeaveOutput WienerHeave::step(double a, double period, double noise_densit
   }
   // Two moving averages (running sums over circular buffers of decimation_ values).
   const int slot = static_cast<int>(samples_ % decimation_);
-  // Sample m goes to ring m mod D, place (m / D) mod ring_length_.
-  newest_ = static_cast<int>(slot * ring_length_ + (samples_ / decimation_) % ring_length_);
+  // Sample m goes to the ring of its phase m mod D (if kept), place (m / D) mod ring_length_.
+  const int ring = ring_of_phase_[slot];
+  if (ring >= 0)
+    newest_ = static_cast<int>(ring * ring_length_ + (samples_ / decimation_) % ring_length_);
   std::array<double, kChannels> low{};
   for (int c = 0; c < channels_used_; ++c)
   {
@@ -156,7 +172,8 @@ WienerHeaveOutput WienerHeave::step(double a, double period, double noise_densit
     channel.second_sum += once - channel.second[slot];
     channel.second[slot] = once;
     low[c] = channel.second_sum / decimation_;
-    channel.history[newest_] = low[c];
+    if (ring >= 0)
+      channel.history[newest_] = low[c];
   }
   ++samples_;
   if (samples_ < 2 * decimation_)
@@ -189,20 +206,46 @@ WienerHeaveOutput WienerHeave::step(double a, double period, double noise_densit
     finishDesign();
   if (!current_)
     return out;
-  apply(*current_, &out.position, &out.velocity);
+  const bool fading = previous_ != nullptr;
+  if (fading)
+    fade_ = std::min(1.0, fade_ + dt_ / kDesignFade);
+  if (ring >= 0)
+  {
+    apply(*current_, &out.position, &out.velocity);
+    if (fading)
+    {
+      double x_old = 0.0, v_old = 0.0;
+      apply(*previous_, &x_old, &v_old);
+      out.position = fade_ * out.position + (1.0 - fade_) * x_old;
+      out.velocity = fade_ * out.velocity + (1.0 - fade_) * v_old;
+    }
+    // The slopes of both outputs since the last kept phase: displacement and velocity are each
+    // their own estimate (the velocity is not the displacement's derivative), so each is carried
+    // along its own.
+    if (carried_.made > 0)
+    {
+      const double span = (samples_ - carried_.sample) * dt_;
+      carried_.position_slope = (out.position - carried_.position) / span;
+      carried_.velocity_slope = (out.velocity - carried_.velocity) / span;
+    }
+    ++carried_.made;
+    carried_.sample = samples_;
+    carried_.position = out.position;
+    carried_.velocity = out.velocity;
+  }
+  else if (carried_.made >= 2)
+  {
+    const double since = (samples_ - carried_.sample) * dt_;
+    out.position = carried_.position + since * carried_.position_slope;
+    out.velocity = carried_.velocity + since * carried_.velocity_slope;
+  }
+  if (fading && fade_ >= 1.0)
+    previous_.reset();
+  if (ring < 0 && carried_.made < 2)
+    return out;  // the samples between kept phases have an output once two slopes' ends are known
   out.error_variance = current_->error_variance;
   out.velocity_error_variance = current_->velocity_error_variance;
   out.wave_variance = current_->wave_variance;
-  if (previous_)
-  {
-    fade_ = std::min(1.0, fade_ + dt_ / kDesignFade);
-    double x_old = 0.0, v_old = 0.0;
-    apply(*previous_, &x_old, &v_old);
-    out.position = fade_ * out.position + (1.0 - fade_) * x_old;
-    out.velocity = fade_ * out.velocity + (1.0 - fade_) * v_old;
-    if (fade_ >= 1.0)
-      previous_.reset();
-  }
   out.valid = !stale_;
   return out;
 }

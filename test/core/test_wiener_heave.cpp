@@ -298,6 +298,68 @@ TEST(WienerHeave, AnyInputRate)
   }
 }
 
+// Above kMaxPhases / kDesignPeriod (256 Hz) the filter keeps kMaxPhases phases of the design-rate
+// period and extrapolates its last two outputs to the samples between. On a 2 kHz stream (a wind
+// sea and a swell, noise, a constant bias and a bias random walk), against the full-rate filter
+// that keeps every phase: the same outputs at the kept phases, the same samples valid but for the
+// first two kept phases', and between them a difference of at most a thousandth of the
+// significant wave height (displacement, and velocity likewise), its RMS under a thousandth of
+// the filter's own RMS error.
+TEST(WienerHeave, KeptPhasesFollowTheFullRateFilter)
+{
+  const Sea wind(1.0 / 8.0, 1.8, 5), swell(1.0 / 15.0, 1.2, 6);
+  const double rate = 2000.0, density = 0.004, sigma = density * std::sqrt(rate / 2.0);
+  const int decimation = static_cast<int>(std::lround(WienerHeave::kDesignPeriod * rate));
+  ASSERT_GT(decimation, WienerHeave::kMaxPhases);
+  std::vector<bool> kept_phase(decimation, false);
+  for (int ring = 0; ring < WienerHeave::kMaxPhases; ++ring)
+    kept_phase[static_cast<long>(ring) * decimation / WienerHeave::kMaxPhases] = true;
+  std::mt19937_64 rng(3);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  WienerHeave kept(0.03, true), full(0.03, true);
+  full.setMaxPhases(decimation);
+  double walk = 0.0, largest_x = 0.0, largest_v = 0.0, difference2 = 0.0, error2 = 0.0, truth_x2 = 0.0, truth_v2 = 0.0;
+  long both = 0, only_full = 0, only_kept = 0, exact = 0, inexact = 0;
+  for (long i = 0; i < static_cast<long>(400 * rate); ++i)
+  {
+    const double t = i / rate;
+    double x = 0.0, v = 0.0, a = 0.0, xs = 0.0, vs = 0.0, as = 0.0;
+    wind.at(t, &x, &v, &a);
+    swell.at(t, &xs, &vs, &as);
+    walk += 4e-4 * std::sqrt(1.0 / rate) * normal(rng);
+    const double measured = a + as + 0.05 + walk + sigma * normal(rng);
+    const WienerHeaveOutput k = kept.update(measured, 1.0 / rate, density * density);
+    const WienerHeaveOutput f = full.update(measured, 1.0 / rate, density * density);
+    truth_x2 += std::pow(x + xs, 2);
+    truth_v2 += std::pow(v + vs, 2);
+    only_full += f.valid && !k.valid;
+    only_kept += k.valid && !f.valid;
+    if (!(k.valid && f.valid))
+      continue;
+    ++both;
+    if (kept_phase[i % decimation])
+      (k.position == f.position && k.velocity == f.velocity ? exact : inexact) += 1;
+    largest_x = std::max(largest_x, std::abs(k.position - f.position));
+    largest_v = std::max(largest_v, std::abs(k.velocity - f.velocity));
+    difference2 += std::pow(k.position - f.position, 2);
+    error2 += std::pow(f.position - x - xs, 2);
+  }
+  const long samples = static_cast<long>(400 * rate);
+  const double hs = 4.0 * std::sqrt(truth_x2 / samples), velocity_scale = 4.0 * std::sqrt(truth_v2 / samples);
+  ASSERT_GT(both, static_cast<long>(300 * rate));
+  EXPECT_GT(exact, both / (2 * decimation / WienerHeave::kMaxPhases));
+  EXPECT_EQ(inexact, 0);
+  EXPECT_LE(only_full, 2 * (decimation / WienerHeave::kMaxPhases + 1));
+  EXPECT_EQ(only_kept, 0);
+  EXPECT_LT(largest_x, 1e-3 * hs);
+  EXPECT_LT(largest_v, 1e-3 * velocity_scale);
+  EXPECT_LT(std::sqrt(difference2), 1e-3 * std::sqrt(error2));
+  std::printf(
+      "kept phases against the full-rate filter: at most %.2g m and %.2g m/s apart (Hs %.2f m); RMS %.2g m "
+      "against the filter's error of %.2g m\n",
+      largest_x, largest_v, hs, std::sqrt(difference2 / both), std::sqrt(error2 / both));
+}
+
 // A swell of 20 s: the FIR spans six peak periods (120 s at most), but never more than the input
 // held since the start (the first design, from about 20 s, would read zeros beyond it).
 TEST(WienerHeave, FirstDesignsReadOnlyTheInputHeld)

@@ -28,7 +28,12 @@
 //     periods (kSpanPeriods, kMinSpan..kMaxSpan; no longer than the input held since reset())
 //     at the design rate, for displacement and velocity (Levinson recursion);
 //  4. applies the FIR at every sample to the low-passed values D samples apart ending at that
-//     sample, so the output has the input's rate; a new design fades in over kDesignFade.
+//     sample, so the output has the input's rate; a new design fades in over kDesignFade. Above
+//     kMaxPhases samples per design-rate period (256 Hz), the values are kept, and the FIR
+//     applied, at kMaxPhases phases of the period only (every 4 ms or less), and the samples
+//     between take the last two such outputs extrapolated: the full-rate histories would be
+//     megabytes (24 MB at 2.8 kHz) read cold at every sample, for outputs low-passed to a few
+//     hertz that a straight line follows over 4 ms.
 //
 // With companions (the other two level axes' accelerations, given at every sample) and no
 // manoeuvre in the record, a second design reads all three inputs: a sea moves every axis with the
@@ -110,6 +115,9 @@ public:
   /// Relative change of the sample period that starts the record over (the buffers and the
   /// design are the old rate's) [-].
   static constexpr double kPeriodChange = 0.1;
+  /// Phases of the design-rate period at which the low-passed values are kept and the FIR is
+  /// applied (every phase at rates up to kMaxPhases / kDesignPeriod) [-].
+  static constexpr int kMaxPhases = 64;
   /// A window resolves a displacement peak from zero frequency once the record holds this many of
   /// its cycles [-].
   static constexpr double kResolvedCycles = 3.0;
@@ -155,6 +163,10 @@ public:
     since_manoeuvre_ = 0.0;
   }
   void setMinFrequency(double min_frequency);
+  /// Phases of the design-rate period kept (kMaxPhases unless set; at least 1); a value of
+  /// kDesignPeriod times the rate or more keeps every sample, the full-rate filter the kept phases
+  /// approximate. Starts over (reset()).
+  void setMaxPhases(int max_phases);
   /// Designs run on the core's design thread (true, the default) or in the call of the sample
   /// they fall due on (false); the outputs are the same.
   void setBackgroundDesigns(bool background)
@@ -210,7 +222,7 @@ private:
     // Two moving averages of decimation_ samples.
     std::vector<double> first, second;
     double first_sum = 0.0, second_sum = 0.0;
-    // Low-passed values at the full rate in decimation_ rings of ring_length_ (one per sample
+    // Low-passed values at the kept phases in phases_ rings of ring_length_ (one per kept sample
     // phase modulo D, so that the FIR reads consecutive values); the newest at newest_.
     ZeroedBuffer history;
     // Design-rate values, oldest first, at most kDesignWindow.
@@ -340,6 +352,19 @@ private:
   std::array<Channel, kChannels> channels_;
   int ring_length_ = 0;
   int newest_ = 0;  ///< the newest value's place in every channel's history
+  int max_phases_ = kMaxPhases;
+  int phases_ = 0;  ///< kept phases of the design-rate period (min(decimation_, max_phases_))
+  /// Per sample phase modulo decimation_, its ring, or -1 where its values are not kept.
+  std::vector<int> ring_of_phase_;
+  /// The last output the FIR made (at a kept phase), to carry to the samples between.
+  struct Carried
+  {
+    long made = 0;    ///< outputs made at kept phases since reset()
+    long sample = 0;  ///< samples_ when the last was made
+    double position = 0.0, velocity = 0.0;
+    /// Each output's change since the one before, per second.
+    double position_slope = 0.0, velocity_slope = 0.0;
+  } carried_;
   double since_design_ = 0.0;
   /// Data since noteManoeuvre() [s] (infinite: none since reset()).
   double since_manoeuvre_ = std::numeric_limits<double>::infinity();
