@@ -242,7 +242,7 @@ WienerHeaveOutput WienerHeave::step(double a, double period, double noise_densit
   if (fading && fade_ >= 1.0)
     previous_.reset();
   if (ring < 0 && carried_.made < 2)
-    return out;  // the samples between kept phases have an output once two slopes' ends are known
+    return out;  // a sample between kept phases has an output once two kept phases have one
   out.error_variance = current_->error_variance;
   out.velocity_error_variance = current_->velocity_error_variance;
   out.wave_variance = current_->wave_variance;

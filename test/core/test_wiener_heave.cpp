@@ -301,10 +301,10 @@ TEST(WienerHeave, AnyInputRate)
 // Above kMaxPhases / kDesignPeriod (256 Hz) the filter keeps kMaxPhases phases of the design-rate
 // period and extrapolates its last two outputs to the samples between. On a 2 kHz stream (a wind
 // sea and a swell, noise, a constant bias and a bias random walk), against the full-rate filter
-// that keeps every phase: the same outputs at the kept phases, the same samples valid but for the
-// first two kept phases', and between them a difference of at most a thousandth of the
-// significant wave height (displacement, and velocity likewise), its RMS under a thousandth of
-// the filter's own RMS error.
+// that keeps every phase: the same outputs at the kept phases; every sample valid in both but the
+// few before the second kept phase; and between kept phases a difference of at most a thousandth
+// of the significant wave height (of four standard deviations of the velocity for the velocity),
+// its RMS under a thousandth of the filter's own RMS error.
 TEST(WienerHeave, KeptPhasesFollowTheFullRateFilter)
 {
   const Sea wind(1.0 / 8.0, 1.8, 5), swell(1.0 / 15.0, 1.2, 6);
