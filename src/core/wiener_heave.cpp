@@ -48,7 +48,6 @@ void WienerHeave::reset()
   }
   ring_length_ = 0;
   newest_ = 0;
-  phases_ = 0;
   ring_of_phase_.clear();
   carried_ = Carried();
   since_design_ = 0.0;
@@ -123,15 +122,15 @@ WienerHeaveOutput WienerHeave::step(double a, double period, double noise_densit
     // is exact), and a reset would then size the rings anew.
     ring_length_ = std::max(1, static_cast<int>(std::lround(kMaxSpan / (decimation_ * dt_))));
     // Kept phases spread evenly over the period; all of them up to kMaxPhases.
-    phases_ = std::min(decimation_, max_phases_);
+    const int phases = std::min(decimation_, max_phases_);
     ring_of_phase_.assign(decimation_, -1);
-    for (int ring = 0; ring < phases_; ++ring)
-      ring_of_phase_[static_cast<long>(ring) * decimation_ / phases_] = ring;
+    for (int ring = 0; ring < phases; ++ring)
+      ring_of_phase_[static_cast<long>(ring) * decimation_ / phases] = ring;
     for (int c = 0; c < channels_used_; ++c)
     {
       channels_[c].first.assign(decimation_, 0.0);
       channels_[c].second.assign(decimation_, 0.0);
-      const size_t history = static_cast<size_t>(ring_length_) * phases_;
+      const size_t history = static_cast<size_t>(ring_length_) * phases;
       if (channels_[c].history.size() != history)
         channels_[c].history = ZeroedBuffer(history);
     }

@@ -222,8 +222,8 @@ private:
     // Two moving averages of decimation_ samples.
     std::vector<double> first, second;
     double first_sum = 0.0, second_sum = 0.0;
-    // Low-passed values at the kept phases in phases_ rings of ring_length_ (one per kept sample
-    // phase modulo D, so that the FIR reads consecutive values); the newest at newest_.
+    // Low-passed values at the kept phases in min(D, max_phases_) rings of ring_length_ (one per
+    // kept sample phase modulo D, so that the FIR reads consecutive values); the newest at newest_.
     ZeroedBuffer history;
     // Design-rate values, oldest first, at most kDesignWindow.
     std::vector<double> decimated;
@@ -351,9 +351,8 @@ private:
   long samples_ = 0;
   std::array<Channel, kChannels> channels_;
   int ring_length_ = 0;
-  int newest_ = 0;  ///< the newest value's place in every channel's history
-  int max_phases_ = kMaxPhases;
-  int phases_ = 0;  ///< kept phases of the design-rate period (min(decimation_, max_phases_))
+  int newest_ = 0;               ///< the newest value's place in every channel's history
+  int max_phases_ = kMaxPhases;  ///< kept phases of the design-rate period at most
   /// Per sample phase modulo decimation_, its ring, or -1 where its values are not kept.
   std::vector<int> ring_of_phase_;
   /// The last output the FIR made (at a kept phase), to carry to the samples between.
