@@ -9,12 +9,13 @@ add_library(${PROJECT_NAME}_parameters
   src/ros/parameter_reference.cpp)
 target_link_libraries(${PROJECT_NAME}_parameters ${PROJECT_NAME}_core ${catkin_LIBRARIES} yaml-cpp)
 
-# Wrapper library: message conversions, the IMU mounting, the CompensatorRos class, the bag writer
-# and the bag check of the offline tools.
+# Wrapper library: message conversions, the IMU mounting, the CompensatorRos class, the bag reader,
+# writer and check of the offline tools.
 add_library(${PROJECT_NAME}_ros
   src/ros/conversions.cpp
   src/ros/mounting.cpp
   src/ros/bag_check.cpp
+  src/ros/bag_reader.cpp
   src/ros/compensator_ros.cpp
   src/ros/bag_writer.cpp)
 # roslz4 and bz2: BagWriter compresses chunks itself, the bag check decompresses them as rosbag
@@ -94,10 +95,14 @@ if(CATKIN_ENABLE_TESTING)
   catkin_add_gtest(test_bag_writer test/ros/bag_writer_test.cpp)
   target_link_libraries(test_bag_writer ${PROJECT_NAME}_ros ${catkin_LIBRARIES})
 
+  # The bag reader against rosbag::View on bags rosbag wrote, and on cut or garbled ones (no master).
+  catkin_add_gtest(test_bag_reader test/ros/bag_reader_test.cpp)
+  target_link_libraries(test_bag_reader ${PROJECT_NAME}_ros ${catkin_LIBRARIES})
+
   # compensate_bag end to end on the bench bag, the batch runs of docs/batch.md, and its error
   # paths (no master).
   catkin_add_gtest(test_compensate_bag test/ros/compensate_bag_test.cpp)
-  target_link_libraries(test_compensate_bag ${catkin_LIBRARIES})
+  target_link_libraries(test_compensate_bag ${PROJECT_NAME}_ros ${catkin_LIBRARIES})
   target_compile_definitions(test_compensate_bag PRIVATE
     PBC_COMPENSATE_BAG="$<TARGET_FILE:compensate_bag>"
     PBC_BENCH_BAG="${PBC_BENCH_BAG}"

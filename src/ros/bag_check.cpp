@@ -170,32 +170,6 @@ struct ChunkLayout
   std::vector<std::pair<std::uint32_t, std::string>> messages;  ///< offset of each message record (rising), its conn
 };
 
-/// A compressed chunk's data decompressed into *plain, as rosbag will (same libraries), so that
-/// its records can be walked before rosbag parses them unchecked. `declared`: the chunk header's
-/// uncompressed size; refused above 1000 x the compressed size + 1 MiB (rosbag would allocate it).
-std::string decompressChunk(const std::string& compression, std::string& data, std::uint64_t declared,
-                            std::uint64_t where, std::string* plain)
-{
-  const std::string what = "chunk at byte " + std::to_string(where) + " (" + compression + ")";
-  if (declared > 1000 * std::uint64_t{ data.size() } + (1u << 20))
-  {
-    return what + " declares " + std::to_string(declared) + " uncompressed bytes for " + std::to_string(data.size()) +
-           " compressed ones";
-  }
-  plain->assign(declared, '\0');
-  unsigned int produced = static_cast<unsigned int>(declared);
-  const bool ok = compression == "lz4"
-                      ? roslz4_buffToBuffDecompress(&data[0], static_cast<unsigned int>(data.size()), &(*plain)[0],
-                                                    &produced) == ROSLZ4_OK
-                      : BZ2_bzBuffToBuffDecompress(&(*plain)[0], &produced, &data[0],
-                                                   static_cast<unsigned int>(data.size()), 0, 0) == BZ_OK;
-  if (!ok || produced != declared)
-  {
-    return what + " does not decompress to the " + std::to_string(declared) + " bytes it declares";
-  }
-  return std::string();
-}
-
 /// The records of an uncompressed chunk; connection records' data is a header too.
 std::string walkChunk(const std::string& data, std::uint64_t base, ChunkLayout* layout)
 {
@@ -410,6 +384,30 @@ std::string bagProblem(const std::string& path, bool read_chunks)
 std::string checkBagStructure(const std::string& path)
 {
   return checkStructure(path, true);
+}
+
+std::string decompressChunk(const std::string& compression, std::string_view data, std::uint64_t declared,
+                            std::uint64_t where, std::string* plain)
+{
+  const std::string what = "chunk at byte " + std::to_string(where) + " (" + compression + ")";
+  if (declared > 1000 * std::uint64_t{ data.size() } + (1u << 20))
+  {
+    return what + " declares " + std::to_string(declared) + " uncompressed bytes for " + std::to_string(data.size()) +
+           " compressed ones";
+  }
+  plain->assign(declared, '\0');
+  unsigned int produced = static_cast<unsigned int>(declared);
+  const bool ok =
+      compression == "lz4"
+          ? roslz4_buffToBuffDecompress(const_cast<char*>(data.data()), static_cast<unsigned int>(data.size()),
+                                        &(*plain)[0], &produced) == ROSLZ4_OK
+          : BZ2_bzBuffToBuffDecompress(&(*plain)[0], &produced, const_cast<char*>(data.data()),
+                                       static_cast<unsigned int>(data.size()), 0, 0) == BZ_OK;
+  if (!ok || produced != declared)
+  {
+    return what + " does not decompress to the " + std::to_string(declared) + " bytes it declares";
+  }
+  return std::string();
 }
 
 std::string corruptBagMessage(const std::string& path, const std::string& what)

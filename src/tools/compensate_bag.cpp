@@ -7,8 +7,9 @@
 //                  [--imu-topic imu/data] [--outputs filtered,wave,bias,ground_truth]
 //                  [--compression none|lz4|bz2]
 //
-// IN is read and deserialised by a thread of its own, a few hundred messages ahead of the core,
-// and OUT's chunks are written by another (ros/bag_writer.h): on a machine with a free core the
+// IN is read (chunk after chunk by ros/bag_reader.h where its chunks follow one another in time,
+// else through rosbag::View) and deserialised by a thread of its own, a few hundred messages
+// ahead of the core, and OUT's chunks are written by another (ros/bag_writer.h): on a machine with a free core the
 // run takes about as long as its slowest part instead of the sum of all three.
 //
 // The outputs are written to temporary files next to them and renamed when complete, so a
@@ -44,12 +45,14 @@
 #include <rosbag/view.h>
 #include <tf2/buffer_core.h>
 #include <tf2_msgs/TFMessage.h>
+#include <boost/make_shared.hpp>
 
 #include "periodic_bias_compensation/common/work_thread.h"
 #include "periodic_bias_compensation/core/calibration_file.h"
 #include "periodic_bias_compensation/core/compensator.h"
 #include "periodic_bias_compensation/core/gain_tuning.h"
 #include "periodic_bias_compensation/ros/bag_check.h"
+#include "periodic_bias_compensation/ros/bag_reader.h"
 #include "periodic_bias_compensation/ros/bag_writer.h"
 #include "periodic_bias_compensation/ros/conversions.h"
 #include "periodic_bias_compensation/ros/mounting.h"
@@ -227,21 +230,23 @@ struct ReadBatch
   }
 };
 
-/// Reads a rosbag::View in a thread of its own, a few batches ahead of the caller, so that
-/// rosbag's reading and deserialising overlap the core and the writing instead of adding to
-/// them: each batch handed to the thread comes back filled with the next messages. The view is
-/// used by that thread alone until the ReadAhead is destroyed. An exception while reading comes
-/// with the batch of the messages read before it, so the caller throws it after handling those,
-/// where a single loop would have thrown it.
+/// Reads IN in a thread of its own, a few batches ahead of the caller, so that reading and
+/// deserialising overlap the core and the writing instead of adding to them: each batch handed to
+/// the thread comes back filled with the next messages. The source is used by that thread alone
+/// until the ReadAhead is destroyed. An exception while reading comes with the batch of the
+/// messages read before it, so the caller throws it after handling those, where a single loop
+/// would have thrown it.
 class ReadAhead
 {
 public:
-  /// Reads one message into the batch (in the reading thread).
-  using ReadOne = std::function<void(const rosbag::MessageInstance&, ReadBatch*)>;
+  /// Messages in a batch: a batch amortises the hand-over.
+  static constexpr std::size_t kBatchMessages = 256;
+  /// Adds the next messages of the source to the batch, up to kBatchMessages (in the reading
+  /// thread); returns whether the source has ended.
+  using Fill = std::function<bool(ReadBatch*)>;
 
-  ReadAhead(rosbag::View* view, ReadOne read_one)
-    : view_(view),
-      read_one_(std::move(read_one)),
+  explicit ReadAhead(Fill source)
+    : fill_(std::move(source)),
       thread_(
           kBatches, [this](Batch& batch) { fill(batch.get()); }, true)
   {
@@ -268,12 +273,10 @@ public:
 
 private:
   using Batch = std::unique_ptr<ReadBatch>;
-  // Batches in flight (read ahead, in the core, waiting to be written) bound the memory; a batch
-  // amortises the hand-over.
+  // Batches in flight (read ahead, in the core, waiting to be written) bound the memory.
   static constexpr int kBatches = 8;
-  static constexpr std::size_t kBatchMessages = 256;
 
-  /// The next messages of the view into `batch` (in the reading thread); after the last, none.
+  /// The next messages of the source into `batch` (in the reading thread); after the last, none.
   void fill(ReadBatch* batch)
   {
     if (ended_)
@@ -282,17 +285,7 @@ private:
     }
     try
     {
-      if (!position_)
-      {
-        position_ = view_->begin();
-        end_ = view_->end();
-      }
-      rosbag::View::iterator& position = *position_;
-      for (; position != end_ && batch->messages.size() < kBatchMessages; ++position)
-      {
-        read_one_(*position, batch);
-      }
-      ended_ = position == end_;
+      ended_ = fill_(batch);
     }
     catch (...)
     {
@@ -302,12 +295,8 @@ private:
     batch->last = ended_;
   }
 
-  rosbag::View* view_;
-  ReadOne read_one_;
-  // The reading thread's: where it is in the view (none before the first batch) and its end.
-  std::optional<rosbag::View::iterator> position_;
-  rosbag::View::iterator end_;
-  bool ended_ = false;
+  Fill fill_;
+  bool ended_ = false;        ///< the reading thread's
   WorkThread<Batch> thread_;  ///< last: started once the rest is built
 };
 
@@ -325,6 +314,24 @@ std::string corruptInputMessage(const Options& options, const std::string& what,
   return corruptBagMessage(options.in, what) + " Nothing was written to " + options.out +
          (received > 0 ? " (" + std::to_string(received) + " IMU messages had been read)" : std::string());
 }
+
+/// IN, open: read by BagReader where its chunks follow one another in time (`stream`), else by
+/// rosbag (`bag`).
+///
+/// rosbag reads IN only once the whole-file check (bagFileProblem) has passed: it trusts the
+/// file's lengths and offsets. rosbag::Bag::open reads only the records around the chunks, which
+/// bagOpenProblem checks first without reading the chunks, so rosbag opens the bag (and, before
+/// that, the bag's constructor loads rosbag's encryption plugins, a walk of the ROS package path)
+/// while the whole-file check runs in a thread. BagReader checks every length and offset it
+/// reads itself: it reads the messages while the whole-file check runs (`check`), and the run
+/// takes that check's result before anything is written (BagCompensator::run), so a bag it
+/// refuses is refused with the same message either way.
+struct Input
+{
+  std::unique_ptr<BagReader> stream;
+  std::unique_ptr<rosbag::Bag> bag;
+  std::future<std::string> check;  ///< with `stream`: the whole-file check, maybe still running
+};
 
 /// Writes the outputs of one bag; the caller owns the temporary file.
 class BagCompensator
@@ -375,9 +382,9 @@ public:
   }
 
   /// Runs over the input, writing OUT to `temp_path`; a truncated or corrupt input
-  /// (rosbag::BagException, a message that does not deserialise) becomes one std::runtime_error
-  /// that says so and what to do.
-  void run(rosbag::Bag* in, const std::string& temp_path)
+  /// (rosbag::BagException, BagFormatError, a message that does not deserialise, the whole-file
+  /// check's finding) becomes one std::runtime_error that says so and what to do.
+  void run(Input* in, const std::string& temp_path)
   {
     try
     {
@@ -385,32 +392,84 @@ public:
     }
     catch (const rosbag::BagException& e)
     {
-      throw std::runtime_error(corruptMessage(e.what()));
+      throw std::runtime_error(corruptMessage(in, e.what()));
     }
     catch (const ros::Exception& e)
     {
-      throw std::runtime_error(corruptMessage(e.what()));
+      throw std::runtime_error(corruptMessage(in, e.what()));
+    }
+    catch (const BagFormatError& e)
+    {
+      throw std::runtime_error(corruptMessage(in, e.what()));
+    }
+    catch (...)
+    {
+      const std::string check = takeCheck(in);
+      if (!check.empty())
+      {
+        throw std::runtime_error(check);
+      }
+      throw;
+    }
+    // Read by BagReader: nothing is written unless the whole-file check passes, as when the
+    // check ran first.
+    const std::string check = takeCheck(in);
+    if (!check.empty())
+    {
+      throw std::runtime_error(check);
     }
   }
 
-  std::string corruptMessage(const std::string& what) const
+  /// What the whole-file check found in IN, once it has run, if it runs beside the reading.
+  static std::string takeCheck(Input* in)
   {
-    return corruptInputMessage(options_, what, received_);
+    return in->check.valid() ? in->check.get() : std::string();
   }
 
-  /// IN has passed checkBagStructure (bagFileProblem) and is open in *bag (openInput).
-  void runUnchecked(rosbag::Bag* bag, const std::string& temp_path)
+  /// What IN's reading stopped on, or what the whole-file check found in IN if it did (said first,
+  /// as when the check ran first).
+  std::string corruptMessage(Input* in, const std::string& what) const
   {
-    rosbag::Bag& in = *bag;
-    const std::string imu_topic = absoluteTopic(options_.imu_topic);
+    const std::string check = takeCheck(in);
+    return check.empty() ? corruptInputMessage(options_, what, received_) : check;
+  }
 
-    rosbag::View all(in);
+  /// IN is open (openInput): rosbag's has passed the whole-file check.
+  void runUnchecked(Input* input, const std::string& temp_path)
+  {
+    const std::string imu_topic = absoluteTopic(options_.imu_topic);
+    // IN's connections that have messages, with their times.
+    std::vector<SourceConnection> all;
+    ros::Time begin, end;
+    if (input->stream)
+    {
+      for (const BagReader::Connection& c : input->stream->connections())
+      {
+        if (c.messages > 0)
+        {
+          all.push_back(SourceConnection{ c.id, c.topic, &c.header, headerField(c.header, "type"),
+                                          headerField(c.header, "md5sum") });
+        }
+      }
+      begin = input->stream->beginTime();
+      end = input->stream->endTime();
+    }
+    else
+    {
+      rosbag::View view(*input->bag);
+      for (const rosbag::ConnectionInfo* c : view.getConnections())
+      {
+        all.push_back(SourceConnection{ c->id, c->topic, c->header.get(), c->datatype, c->md5sum });
+      }
+      begin = view.getBeginTime();
+      end = view.getEndTime();
+    }
     std::set<std::string> topics;
     bool has_imu = false;
-    for (const rosbag::ConnectionInfo* c : all.getConnections())
+    for (const SourceConnection& c : all)
     {
-      topics.insert(c->topic);
-      has_imu = has_imu || absoluteTopic(c->topic) == imu_topic;
+      topics.insert(c.topic);
+      has_imu = has_imu || absoluteTopic(c.topic) == imu_topic;
     }
     if (!has_imu)
     {
@@ -423,31 +482,43 @@ public:
                                " (topics: " + (list.empty() ? "none" : list) + ")");
     }
 
-    resolveMounting(in, imu_topic);
+    resolveMounting(input, all, imu_topic);
 
-    // What each connection of IN is to this tool: only those used are read. A message finds its
-    // connection by its connection header (the same object for all messages of a connection).
+    // What each connection of IN is to this tool: only those used are read.
     std::vector<InputConnection> connections;
-    for (const rosbag::ConnectionInfo* c : all.getConnections())
+    for (const SourceConnection& c : all)
     {
-      const std::string topic = absoluteTopic(c->topic);
+      const std::string topic = absoluteTopic(c.topic);
       const Role role = topic == imu_topic                                      ? Role::kImu
                         : options_.outputs.ground_truth && isGroundTruth(topic) ? Role::kCopy
                                                                                 : Role::kSkip;
-      connections.push_back(InputConnection{ c->header.get(), c->id, role, topic });
+      connections.push_back(InputConnection{ c, role, topic });
     }
-    rosbag::View view(in, [&connections](const rosbag::ConnectionInfo* c) {
-      return std::any_of(connections.begin(), connections.end(),
-                         [c](const InputConnection& i) { return i.id == c->id && i.role != Role::kSkip; });
-    });
-
     // Compression and file writes in a thread of the writer: they overlap the core.
     BagWriter out(temp_path, options_.compression, true);
-    const ros::Time begin = all.getBeginTime();
-    const double span = std::max((all.getEndTime() - begin).toSec(), 1e-9);
-    processAll(&view, connections, begin, span, &out);
+    const double span = std::max((end - begin).toSec(), 1e-9);
+    if (input->stream)
+    {
+      std::vector<std::uint32_t> used;
+      for (const InputConnection& c : connections)
+      {
+        if (c.role != Role::kSkip)
+        {
+          used.push_back(c.source.id);
+        }
+      }
+      input->stream->select(used);
+      processAll(streamFill(input->stream.get(), connections), connections, begin, span, &out);
+    }
+    else
+    {
+      rosbag::View view(*input->bag, [&connections](const rosbag::ConnectionInfo* c) {
+        return std::any_of(connections.begin(), connections.end(),
+                           [c](const InputConnection& i) { return i.source.id == c->id && i.role != Role::kSkip; });
+      });
+      processAll(viewFill(&view, connections), connections, begin, span, &out);
+    }
     out.close();
-    in.close();
     // The last line stays: the whole bag was read.
     reportProgress(span, span);
   }
@@ -509,62 +580,153 @@ private:
     kImu,   ///< compensated
     kCopy,  ///< ground_truth/*, copied through
   };
+  /// A connection of IN, as its connection record says (rosbag's or BagReader's).
+  struct SourceConnection
+  {
+    std::uint32_t id;
+    std::string topic;            ///< as recorded
+    const ros::M_string* header;  ///< its connection header, owned by the source
+    std::string type, md5sum;
+  };
   struct InputConnection
   {
-    const ros::M_string* header;  ///< rosbag::ConnectionInfo::header
-    std::uint32_t id;
+    SourceConnection source;
     Role role;
     std::string topic;  ///< with its leading '/', as the outputs are named
   };
 
-  /// In the reading thread: finds the connection of `m` (*last: the previous message's, which
-  /// the next one tends to share) and adds `m` to *batch, deserialised if it is an IMU message.
-  static void readMessage(const rosbag::MessageInstance& m, const std::vector<InputConnection>& connections,
-                          std::size_t* last, ReadBatch* batch)
+  static std::string headerField(const ros::M_string& header, const std::string& name)
   {
-    const ros::M_string* header = m.getConnectionHeader().get();
-    if (connections[*last].header != header)
+    const auto field = header.find(name);
+    return field == header.end() ? std::string() : field->second;
+  }
+
+  /// A message of type M from its serialised bytes; none if its connection is of another type
+  /// (its md5sum is not M's, as rosbag::MessageInstance::instantiate decides).
+  template <class M>
+  static boost::shared_ptr<M> deserializeAs(const SourceConnection& connection, const std::uint8_t* data,
+                                            std::uint32_t size)
+  {
+    if (connection.md5sum != ros::message_traits::md5sum<M>())
     {
-      *last = std::find_if(connections.begin(), connections.end(),
-                           [header](const InputConnection& c) { return c.header == header; }) -
-              connections.begin();
-      if (*last == connections.size())
-      {
-        throw std::runtime_error("a message of topic '" + m.getTopic() + "' has no connection record");
-      }
+      return nullptr;
     }
+    auto message = boost::make_shared<M>();
+    ros::serialization::IStream stream(const_cast<std::uint8_t*>(data), size);
+    ros::serialization::deserialize(stream, *message);
+    return message;
+  }
+
+  /// In the reading thread: adds a message of connections[connection] to *batch, deserialised if
+  /// it is an IMU message, else as a copy of its bytes.
+  static void addMessage(const InputConnection& connection, std::size_t index, const ros::Time& time,
+                         const std::uint8_t* data, std::uint32_t size, ReadBatch* batch)
+  {
     ReadBatch::Message message;
-    message.time = m.getTime();
-    message.connection = *last;
-    if (connections[*last].role == Role::kImu)
+    message.time = time;
+    message.connection = index;
+    if (connection.role == Role::kImu)
     {
-      message.imu = m.instantiate<sensor_msgs::Imu>();
+      message.imu = deserializeAs<sensor_msgs::Imu>(connection.source, data, size);
       if (!message.imu)
       {
-        throw std::runtime_error("topic '" + m.getTopic() + "' holds " + m.getDataType() + ", not sensor_msgs/Imu");
+        throw std::runtime_error("topic '" + connection.source.topic + "' holds " + connection.source.type +
+                                 ", not sensor_msgs/Imu");
       }
     }
     else
     {
       message.offset = batch->used;
-      message.size = m.size();
-      ros::serialization::OStream stream(batch->addBytes(message.size), message.size);
-      m.write(stream);
+      message.size = size;
+      std::copy(data, data + size, batch->addBytes(size));
     }
     batch->messages.push_back(std::move(message));
   }
 
-  /// Compensates the messages of `view` (those of `connections` not skipped) in bag order into
+  /// The messages of `view` (rosbag's), for ReadAhead. Each finds its connection by its connection
+  /// header (the same object for all messages of a connection; the previous message's first).
+  static ReadAhead::Fill viewFill(rosbag::View* view, const std::vector<InputConnection>& connections)
+  {
+    struct Position
+    {
+      std::optional<rosbag::View::iterator> next, end;
+      std::size_t last = 0;
+      std::vector<std::uint8_t> bytes;
+    };
+    return [view, &connections, at = std::make_shared<Position>()](ReadBatch* batch) {
+      if (!at->next)
+      {
+        at->next = view->begin();
+        at->end = view->end();
+      }
+      rosbag::View::iterator& position = *at->next;
+      for (; position != *at->end && batch->messages.size() < ReadAhead::kBatchMessages; ++position)
+      {
+        const rosbag::MessageInstance& m = *position;
+        const ros::M_string* header = m.getConnectionHeader().get();
+        std::size_t& last = at->last;
+        if (connections[last].source.header != header)
+        {
+          last = std::find_if(connections.begin(), connections.end(),
+                              [header](const InputConnection& c) { return c.source.header == header; }) -
+                 connections.begin();
+          if (last == connections.size())
+          {
+            throw std::runtime_error("a message of topic '" + m.getTopic() + "' has no connection record");
+          }
+        }
+        // Its bytes (MessageInstance::write reads them from the bag), then handled as BagReader's.
+        at->bytes.resize(m.size());
+        ros::serialization::OStream stream(at->bytes.data(), m.size());
+        m.write(stream);
+        addMessage(connections[last], last, m.getTime(), at->bytes.data(), m.size(), batch);
+      }
+      return position == *at->end;
+    };
+  }
+
+  /// The selected messages of `stream` (BagReader::chunksInTimeOrder), for ReadAhead.
+  static ReadAhead::Fill streamFill(BagReader* stream, const std::vector<InputConnection>& connections)
+  {
+    struct Position
+    {
+      std::vector<BagReader::Message> chunk;
+      std::size_t next = 0;
+      std::size_t last = 0;
+    };
+    return [stream, &connections, at = std::make_shared<Position>()](ReadBatch* batch) {
+      while (batch->messages.size() < ReadAhead::kBatchMessages)
+      {
+        if (at->next == at->chunk.size())
+        {
+          at->next = 0;
+          if (!stream->nextChunk(&at->chunk))
+          {
+            return true;
+          }
+        }
+        const BagReader::Message& m = at->chunk[at->next++];
+        if (connections[at->last].source.id != m.connection)
+        {
+          // Selected from `connections`: found.
+          at->last = std::find_if(connections.begin(), connections.end(),
+                                  [&m](const InputConnection& c) { return c.source.id == m.connection; }) -
+                     connections.begin();
+        }
+        addMessage(connections[at->last], at->last, m.time, m.data, m.size, batch);
+      }
+      return false;
+    };
+  }
+
+  /// Compensates the messages of `source` (those of `connections` not skipped) in bag order into
   /// *out, copying ground_truth/* through: they are read ahead by a thread (ReadAhead), run
   /// through the core in this one, and their outputs built and written by another (WorkThread).
   /// Says how far it is on stderr every 2 s or so (`begin`, `span`: the bag's).
-  void processAll(rosbag::View* view, const std::vector<InputConnection>& connections, const ros::Time& begin,
+  void processAll(ReadAhead::Fill source, const std::vector<InputConnection>& connections, const ros::Time& begin,
                   double span, BagWriter* out)
   {
-    std::size_t last = 0;  // the reading thread's
-    ReadAhead reader(view, [&connections, &last](const rosbag::MessageInstance& m, ReadBatch* batch) {
-      readMessage(m, connections, &last, batch);
-    });
+    ReadAhead reader(std::move(source));
     std::vector<std::optional<std::uint32_t>> copies(connections.size());  // OUT's connection, for kCopy
     // The outputs of the batches the core has been through are built and written, with the
     // messages copied through, in a thread of their own and in bag order, so that building,
@@ -587,7 +749,7 @@ private:
         std::optional<std::uint32_t>& copy = copies[m.connection];
         if (!copy)
         {
-          copy = out->addConnection(connections[m.connection].topic, *connections[m.connection].header);
+          copy = out->addConnection(connections[m.connection].topic, *connections[m.connection].source.header);
         }
         out->write(*copy, m.time, done.read->bytes.data() + m.offset, m.size);
       }
@@ -634,33 +796,88 @@ private:
     }
   }
 
-  /// The messages of `topic` in IN (with or without its leading '/') up to bag time `until`.
-  static rosbag::View topicView(const rosbag::Bag& in, const std::string& topic, const ros::Time& until = ros::TIME_MAX)
+  /// Calls visit(time, connection, data, size) for the messages of `topic` in IN (with or without
+  /// its leading '/') up to bag time `until`, in time order, while it returns true.
+  using Visit = std::function<bool(const ros::Time&, const SourceConnection&, const std::uint8_t*, std::uint32_t)>;
+  static void forEachMessage(Input* in, const std::vector<SourceConnection>& all, const std::string& topic,
+                             const ros::Time& until, const Visit& visit)
   {
-    return rosbag::View(
-        in, [topic](const rosbag::ConnectionInfo* c) { return absoluteTopic(c->topic) == topic; }, ros::TIME_MIN,
+    std::vector<const SourceConnection*> of_topic;
+    for (const SourceConnection& c : all)
+    {
+      if (absoluteTopic(c.topic) == topic)
+      {
+        of_topic.push_back(&c);
+      }
+    }
+    if (in->stream)
+    {
+      std::vector<std::uint32_t> ids;
+      for (const SourceConnection* c : of_topic)
+      {
+        ids.push_back(c->id);
+      }
+      in->stream->select(ids);
+      std::vector<BagReader::Message> messages;
+      while (in->stream->nextChunk(&messages))
+      {
+        for (const BagReader::Message& m : messages)
+        {
+          const auto c = std::find_if(of_topic.begin(), of_topic.end(),
+                                      [&m](const SourceConnection* c) { return c->id == m.connection; });
+          if (m.time > until || !visit(m.time, **c, m.data, m.size))
+          {
+            return;
+          }
+        }
+      }
+      return;
+    }
+    rosbag::View view(
+        *in->bag, [&topic](const rosbag::ConnectionInfo* c) { return absoluteTopic(c->topic) == topic; }, ros::TIME_MIN,
         until);
+    std::vector<std::uint8_t> bytes;
+    for (const rosbag::MessageInstance& m : view)
+    {
+      const ros::M_string* header = m.getConnectionHeader().get();
+      const auto c = std::find_if(of_topic.begin(), of_topic.end(),
+                                  [header](const SourceConnection* c) { return c->header == header; });
+      if (c == of_topic.end())
+      {
+        throw std::runtime_error("a message of topic '" + m.getTopic() + "' has no connection record");
+      }
+      bytes.resize(m.size());
+      ros::serialization::OStream stream(bytes.data(), static_cast<std::uint32_t>(bytes.size()));
+      m.write(stream);
+      if (!visit(m.getTime(), **c, bytes.data(), static_cast<std::uint32_t>(bytes.size())))
+      {
+        return;
+      }
+    }
   }
 
   /// Adds the transforms of IN's `topic` (tf2_msgs/TFMessage) up to bag time `until` to *tf.
   /// @return how many were added
-  static int addTransforms(const rosbag::Bag& in, const std::string& topic, const ros::Time& until, tf2::BufferCore* tf)
+  static int addTransforms(Input* in, const std::vector<SourceConnection>& all, const std::string& topic,
+                           const ros::Time& until, tf2::BufferCore* tf)
   {
     int added = 0;
-    for (const rosbag::MessageInstance& m : topicView(in, topic, until))
-    {
-      const tf2_msgs::TFMessage::ConstPtr message = m.instantiate<tf2_msgs::TFMessage>();
-      if (!message)
-      {
-        std::fprintf(stderr, "compensate_bag: %s holds %s, not tf2_msgs/TFMessage: not used for the mounting\n",
-                     topic.c_str(), m.getDataType().c_str());
-        return added;
-      }
-      for (const geometry_msgs::TransformStamped& transform : message->transforms)
-      {
-        added += tf->setTransform(transform, "bag " + topic, topic == "/tf_static") ? 1 : 0;
-      }
-    }
+    forEachMessage(in, all, topic, until,
+                   [&](const ros::Time&, const SourceConnection& c, const std::uint8_t* data, std::uint32_t size) {
+                     const tf2_msgs::TFMessage::ConstPtr message = deserializeAs<tf2_msgs::TFMessage>(c, data, size);
+                     if (!message)
+                     {
+                       std::fprintf(stderr,
+                                    "compensate_bag: %s holds %s, not tf2_msgs/TFMessage: not used for the mounting\n",
+                                    topic.c_str(), c.type.c_str());
+                       return false;
+                     }
+                     for (const geometry_msgs::TransformStamped& transform : message->transforms)
+                     {
+                       added += tf->setTransform(transform, "bag " + topic, topic == "/tf_static") ? 1 : 0;
+                     }
+                     return true;
+                   });
     return added;
   }
 
@@ -668,11 +885,16 @@ private:
   /// first message (lookupMounting) from the bag's /tf_static and, failing that, its /tf up to
   /// mount_timeout after the first IMU message. Nothing is dropped meanwhile: the bag holds
   /// them all already. Said on stderr.
-  void resolveMounting(const rosbag::Bag& in, const std::string& imu_topic)
+  void resolveMounting(Input* in, const std::vector<SourceConnection>& all, const std::string& imu_topic)
   {
-    rosbag::View imu = topicView(in, imu_topic);
-    const auto first = imu.begin();
-    const sensor_msgs::Imu::ConstPtr message = first == imu.end() ? nullptr : first->instantiate<sensor_msgs::Imu>();
+    sensor_msgs::Imu::ConstPtr message;
+    ros::Time first;
+    forEachMessage(in, all, imu_topic, ros::TIME_MAX,
+                   [&](const ros::Time& time, const SourceConnection& c, const std::uint8_t* data, std::uint32_t size) {
+                     message = deserializeAs<sensor_msgs::Imu>(c, data, size);
+                     first = time;
+                     return false;
+                   });
     if (!message)
     {
       return;  // no message, or not sensor_msgs/Imu: the main loop says so
@@ -685,13 +907,13 @@ private:
     int transforms = 0;
     if (lookup.source == MountingSource::kMissing)
     {
-      transforms += addTransforms(in, source, ros::TIME_MAX, &tf);
+      transforms += addTransforms(in, all, source, ros::TIME_MAX, &tf);
       lookup = lookupMounting(tf, frame, params_.ros);
     }
     if (lookup.source == MountingSource::kMissing)
     {
       source = "/tf";
-      transforms += addTransforms(in, source, first->getTime() + ros::Duration(params_.ros.mount_timeout), &tf);
+      transforms += addTransforms(in, all, source, first + ros::Duration(params_.ros.mount_timeout), &tf);
       lookup = lookupMounting(tf, frame, params_.ros);
     }
     mounting_ = lookup.mounting;
@@ -818,30 +1040,38 @@ private:
   std::optional<std::uint32_t> filtered_connection_, wave_connection_, bias_connection_;  ///< in OUT
 };
 
-/// IN, checked and open: it exists and rosbag can read it safely (bagFileProblem, which reads the
-/// whole file). rosbag::Bag::open reads only the records around the chunks, which
-/// bagOpenProblem checks first without reading the chunks, so rosbag opens the bag (and, before
-/// that, the bag's constructor loads rosbag's encryption plugins, a walk of the ROS package path)
-/// while the whole-file check runs in a thread. No message is read before that check has passed,
-/// and its message is the one given for a bag it refuses, as when it ran alone.
-std::unique_ptr<rosbag::Bag> openInput(const Options& options)
+Input openInput(const Options& options)
 {
-  std::future<std::string> problem = std::async(std::launch::async, bagFileProblem, options.in);
-  auto bag = std::make_unique<rosbag::Bag>();
+  Input input;
+  input.check = std::async(std::launch::async, bagFileProblem, options.in);
+  try
+  {
+    input.stream = std::make_unique<BagReader>(options.in);
+    if (input.stream->chunksInTimeOrder())
+    {
+      return input;
+    }
+  }
+  catch (const std::exception&)
+  {
+    // Not for BagReader (missing, unindexed, not a bag): the checks below say what it is.
+  }
+  input.stream.reset();
+  input.bag = std::make_unique<rosbag::Bag>();
   const std::string open_problem = bagOpenProblem(options.in);
   std::string open_error;
   if (open_problem.empty())
   {
     try
     {
-      bag->open(options.in, rosbag::bagmode::Read);
+      input.bag->open(options.in, rosbag::bagmode::Read);
     }
     catch (const rosbag::BagException& e)
     {
       open_error = e.what();
     }
   }
-  const std::string why = problem.get();
+  const std::string why = input.check.get();
   if (!why.empty())
   {
     throw std::runtime_error(why);
@@ -854,7 +1084,7 @@ std::unique_ptr<rosbag::Bag> openInput(const Options& options)
   {
     throw std::runtime_error(corruptInputMessage(options, open_error, 0));
   }
-  return bag;
+  return input;
 }
 }  // namespace
 
@@ -869,7 +1099,7 @@ int compensateBagMain(int argc, char** argv)
     if (!parsed)
       return 0;
     options = *parsed;
-    const std::unique_ptr<rosbag::Bag> in = openInput(options);
+    Input in = openInput(options);
     const Parameters params = loadParameters(options);
     // Both outputs are created (as temporaries) before the bag is read: one that cannot be
     // written is said at once.
@@ -880,7 +1110,7 @@ int compensateBagMain(int argc, char** argv)
       gains.emplace(options.tune_gains);
     }
     BagCompensator compensator(options, params);
-    compensator.run(in.get(), out.temporary());
+    compensator.run(&in, out.temporary());
     const std::string tuned = gains ? compensator.tuneGains() : std::string();
     out.commit();
     compensator.printSummary();

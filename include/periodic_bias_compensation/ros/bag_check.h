@@ -2,7 +2,9 @@
 // read; shared by compensate_bag and diagnose_gap. No NodeHandle, no master needed.
 #pragma once
 
+#include <cstdint>
 #include <string>
+#include <string_view>
 
 namespace periodic_bias_compensation
 {
@@ -28,6 +30,13 @@ std::string bagFileProblem(const std::string& path);
 /// open the bag, not to read its messages; quick (it skips over the chunks). Whatever it finds,
 /// bagFileProblem finds too.
 std::string bagOpenProblem(const std::string& path);
+
+/// A compressed chunk's data (`compression`: "lz4" or "bz2") decompressed into *plain by the
+/// libraries rosbag uses. `declared`: the chunk header's uncompressed size, refused above 1000 x
+/// the compressed size + 1 MiB (it is allocated first); `where`: the chunk's place in the file.
+/// @return an empty string, or what is wrong and where
+std::string decompressChunk(const std::string& compression, std::string_view data, std::uint64_t declared,
+                            std::uint64_t where, std::string* plain);
 
 /// "input bag 'PATH' is truncated or corrupt (WHAT); a bag cut off while recording has no
 /// index: 'rosbag reindex PATH' recovers the messages written before the cut." WHAT: what the
