@@ -9,8 +9,9 @@
 //
 // IN is read (chunk after chunk by ros/bag_reader.h where its chunks follow one another in time,
 // else through rosbag::View) and deserialised by a thread of its own, a few hundred messages
-// ahead of the core, and OUT's chunks are written by another (ros/bag_writer.h): on a machine with a free core the
-// run takes about as long as its slowest part instead of the sum of all three.
+// ahead of the core, and OUT's chunks are written by another (ros/bag_writer.h): on a machine
+// with a free core the run takes about as long as its slowest part instead of the sum of all
+// three.
 //
 // The outputs are written to temporary files next to them and renamed when complete, so a
 // failure or a signal never leaves a partial OUT behind; an input is never overwritten
@@ -324,8 +325,8 @@ std::string corruptInputMessage(const Options& options, const std::string& what,
 /// that, the bag's constructor loads rosbag's encryption plugins, a walk of the ROS package path)
 /// while the whole-file check runs in a thread. BagReader checks every length and offset it
 /// reads itself: it reads the messages while the whole-file check runs (`check`), and the run
-/// takes that check's result before anything is written (BagCompensator::run), so a bag it
-/// refuses is refused with the same message either way.
+/// takes that check's result before the output is kept (BagCompensator::run), so a bag it
+/// refuses is refused with the same message either way, and leaves no output.
 struct Input
 {
   std::unique_ptr<BagReader> stream;
@@ -411,7 +412,7 @@ public:
       }
       throw;
     }
-    // Read by BagReader: nothing is written unless the whole-file check passes, as when the
+    // Read by BagReader: the output is kept only if the whole-file check passes, as when the
     // check ran first.
     const std::string check = takeCheck(in);
     if (!check.empty())
