@@ -240,8 +240,9 @@ struct ReadBatch
 class ReadAhead
 {
 public:
-  /// Messages in a batch: a batch amortises the hand-over.
-  static constexpr std::size_t kBatchMessages = 256;
+  /// Messages in a batch: a batch amortises the hand-over, which wakes a thread (and the woken
+  /// thread may take the waking one's core for a while). Eight of them in flight hold a few MB.
+  static constexpr std::size_t kBatchMessages = 1024;
   /// Adds the next messages of the source to the batch, up to kBatchMessages (in the reading
   /// thread); returns whether the source has ended.
   using Fill = std::function<bool(ReadBatch*)>;
