@@ -238,17 +238,35 @@ void BagReader::readIndex()
     end_ = std::max(end_, chunk.end);
     chunks_.push_back(std::move(chunk));
   }
-  // In file order and in time order, each chunk before the index.
-  in_time_order_ = !encrypted;
-  ros::Time latest_end;
-  for (std::size_t k = 0; k < chunks_.size(); ++k)
+  // Where each chunk's bytes end (the next chunk in the file, or the index), and in which order
+  // they are opened: by start time, ties in the order of their info records.
+  for (const ChunkInfo& c : chunks_)
   {
-    const ChunkInfo& c = chunks_[k];
-    if (c.position >= index_position_ || (k > 0 && c.position <= chunks_[k - 1].position) ||
-        (k > 0 && c.start < latest_end))
-      in_time_order_ = false;
-    latest_end = std::max(latest_end, c.end);
+    if (c.position >= index_position_)
+      throw BagFormatError("a chunk info record points at byte " + std::to_string(c.position) + ", past the index");
+    positions_.push_back(c.position);
   }
+  std::sort(positions_.begin(), positions_.end());
+  order_.resize(chunks_.size());
+  for (std::size_t k = 0; k < chunks_.size(); ++k)
+    order_[k] = k;
+  std::stable_sort(order_.begin(), order_.end(),
+                   [this](std::size_t a, std::size_t b) { return chunks_[a].start < chunks_[b].start; });
+  // How many chunks hold one time between them at most (each is read whole and kept while a
+  // message of it is still to come).
+  std::vector<std::pair<ros::Time, int>> edges;  // +1 at a start, -1 after an end
+  for (const ChunkInfo& c : chunks_)
+  {
+    edges.emplace_back(c.start, 1);
+    edges.emplace_back(c.end, -1);
+  }
+  std::sort(edges.begin(), edges.end(), [](const auto& a, const auto& b) {
+    return a.first < b.first || (a.first == b.first && a.second > b.second);  // starts first: closed
+  });
+  int open = 0, most = 0;
+  for (const auto& edge : edges)
+    most = std::max(most, open += edge.second);
+  usable_ = !encrypted && most <= kMaxOpenChunks;
 }
 
 void BagReader::select(const std::vector<std::uint32_t>& ids)
@@ -256,26 +274,83 @@ void BagReader::select(const std::vector<std::uint32_t>& ids)
   selected_ = ids;
   std::sort(selected_.begin(), selected_.end());
   next_chunk_ = 0;
+  for (std::unique_ptr<Cursor>& cursor : open_)
+    spare_.push_back(std::move(cursor));
+  open_.clear();
+  skipUnselected();
 }
 
-bool BagReader::nextChunk(std::vector<Message>* messages)
+void BagReader::skipUnselected()
+{
+  while (next_chunk_ < order_.size() &&
+         std::none_of(chunks_[order_[next_chunk_]].connections.begin(), chunks_[order_[next_chunk_]].connections.end(),
+                      [this](std::uint32_t id) { return std::binary_search(selected_.begin(), selected_.end(), id); }))
+    ++next_chunk_;
+}
+
+bool BagReader::next(std::vector<Message>* messages)
 {
   messages->clear();
-  if (!in_time_order_)
+  if (!usable_)
     return false;
-  while (next_chunk_ < chunks_.size() && messages->empty())
+  // Chunks all of whose messages were given in the last call: their buffers serve again.
+  for (auto cursor = open_.begin(); cursor != open_.end();)
   {
-    const ChunkInfo& chunk = chunks_[next_chunk_++];
-    if (std::any_of(chunk.connections.begin(), chunk.connections.end(),
-                    [this](std::uint32_t id) { return std::binary_search(selected_.begin(), selected_.end(), id); }))
-      readChunk(next_chunk_ - 1, messages);
+    if ((*cursor)->next == (*cursor)->messages.size())
+    {
+      spare_.push_back(std::move(*cursor));
+      cursor = open_.erase(cursor);
+    }
+    else
+      ++cursor;
   }
-  return !messages->empty();
+  while (true)
+  {
+    // The earliest message of the open chunks; of equal times, the one of the chunk whose info
+    // record comes first (as rosbag orders a connection's messages), then its place in the chunk.
+    Cursor* first = nullptr;
+    for (const std::unique_ptr<Cursor>& cursor : open_)
+    {
+      if (cursor->next == cursor->messages.size())
+        continue;
+      const ros::Time& time = cursor->messages[cursor->next].time;
+      if (!first || time < first->messages[first->next].time ||
+          (time == first->messages[first->next].time && cursor->chunk < first->chunk))
+        first = cursor.get();
+    }
+    // A chunk that starts no later than that message may hold an earlier one, or one of the same
+    // time that comes first: it is opened first.
+    if (next_chunk_ < order_.size() &&
+        (!first || chunks_[order_[next_chunk_]].start <= first->messages[first->next].time))
+    {
+      openChunk(order_[next_chunk_++]);
+      skipUnselected();
+      continue;
+    }
+    if (!first)
+      return !messages->empty();  // every chunk read
+    messages->push_back(first->messages[first->next++]);
+    // A chunk's worth at a time: the buffers of a chunk given whole are released at the next call.
+    if (first->next == first->messages.size())
+      return true;
+  }
 }
 
-void BagReader::readChunk(std::size_t k, std::vector<Message>* messages)
+void BagReader::openChunk(std::size_t k)
 {
   const ChunkInfo& chunk = chunks_[k];
+  std::unique_ptr<Cursor> cursor;
+  if (spare_.empty())
+    cursor = std::make_unique<Cursor>();
+  else
+  {
+    cursor = std::move(spare_.back());
+    spare_.pop_back();
+  }
+  cursor->messages.clear();
+  cursor->next = 0;
+  std::string& record = cursor->record;
+  std::string& plain = cursor->plain;
   // The chunk record's header, then its data and the index records after it (up to the next
   // chunk, or the index) in one read.
   readAt(chunk.position, 4, &header_);
@@ -291,23 +366,24 @@ void BagReader::readChunk(std::size_t k, std::vector<Message>* messages)
   const std::uint32_t declared = u32(fixedField(header, chunk.position, "size", 4).data());
   const std::uint64_t data_position = chunk.position + 4 + header_.size();
   const std::uint32_t data_length = u32(header_.data() + header_.size() - 4);
-  const std::uint64_t region_end = k + 1 < chunks_.size() ? chunks_[k + 1].position : index_position_;
+  const auto later = std::upper_bound(positions_.begin(), positions_.end(), chunk.position);
+  const std::uint64_t region_end = later != positions_.end() ? *later : index_position_;
   if (data_position > region_end || data_length > region_end - data_position)
     throw BagFormatError("chunk" + at(chunk.position) + " runs into the record after it");
-  readAt(data_position, region_end - data_position, &record_);
-  std::string_view data = std::string_view(record_).substr(0, data_length);
+  readAt(data_position, region_end - data_position, &record);
+  std::string_view data = std::string_view(record).substr(0, data_length);
   if (compression != "none")
   {
     if (compression != "lz4" && compression != "bz2")
       throw BagFormatError("chunk" + at(chunk.position) + " has unknown compression '" + compression + "'");
-    const std::string why = decompressChunk(compression, data, declared, chunk.position, &plain_);
+    const std::string why = decompressChunk(compression, data, declared, chunk.position, &plain);
     if (!why.empty())
       throw BagFormatError(why);
-    data = plain_;
+    data = plain;
   }
   // One index record per connection of the chunk follows it (what rosbag reads at open).
   entries_.clear();
-  const std::string_view after = std::string_view(record_).substr(data_length);
+  const std::string_view after = std::string_view(record).substr(data_length);
   std::size_t offset = 0;
   for (std::size_t i = 0; i < chunk.connections.size(); ++i)
   {
@@ -343,9 +419,11 @@ void BagReader::readChunk(std::size_t k, std::vector<Message>* messages)
       throw BagFormatError("index entry of connection " + std::to_string(entry.connection) + " points at offset " +
                            std::to_string(entry.offset) + " of the chunk" + at(chunk.position) +
                            ", where no message starts");
-    messages->push_back(Message{ entry.connection, entry.time,
-                                 reinterpret_cast<const std::uint8_t*>(message.data.data()),
-                                 static_cast<std::uint32_t>(message.data.size()) });
+    cursor->messages.push_back(Message{ entry.connection, entry.time,
+                                        reinterpret_cast<const std::uint8_t*>(message.data.data()),
+                                        static_cast<std::uint32_t>(message.data.size()) });
   }
+  cursor->chunk = k;
+  open_.push_back(std::move(cursor));
 }
 }  // namespace periodic_bias_compensation

@@ -7,8 +7,8 @@
 //                  [--imu-topic imu/data] [--outputs filtered,wave,bias,ground_truth]
 //                  [--compression none|lz4|bz2]
 //
-// IN is read (chunk after chunk by ros/bag_reader.h where its chunks follow one another in time,
-// else through rosbag::View) and deserialised by a thread of its own, a few hundred messages
+// IN is read (by ros/bag_reader.h, chunk after chunk; through rosbag::View where that reader
+// cannot: an encrypted bag, or one with more than 64 chunks overlapping in time) and deserialised by a thread of its own, a few hundred messages
 // ahead of the core, and OUT's chunks are written by another (ros/bag_writer.h): on a machine
 // with a free core the run takes about as long as its slowest part instead of the sum of all
 // three.
@@ -317,8 +317,8 @@ std::string corruptInputMessage(const Options& options, const std::string& what,
          (received > 0 ? " (" + std::to_string(received) + " IMU messages had been read)" : std::string());
 }
 
-/// IN, open: read by BagReader where its chunks follow one another in time (`stream`), else by
-/// rosbag (`bag`).
+/// IN, open: read by BagReader where it can (BagReader::usable: `stream`), else by rosbag
+/// (`bag`).
 ///
 /// rosbag reads IN only once the whole-file check (bagFileProblem) has passed: it trusts the
 /// file's lengths and offsets. rosbag::Bag::open reads only the records around the chunks, which
@@ -687,7 +687,7 @@ private:
     };
   }
 
-  /// The selected messages of `stream` (BagReader::chunksInTimeOrder), for ReadAhead.
+  /// The selected messages of `stream` (BagReader::usable), for ReadAhead.
   static ReadAhead::Fill streamFill(BagReader* stream, const std::vector<InputConnection>& connections)
   {
     struct Position
@@ -702,7 +702,7 @@ private:
         if (at->next == at->chunk.size())
         {
           at->next = 0;
-          if (!stream->nextChunk(&at->chunk))
+          if (!stream->next(&at->chunk))
           {
             return true;
           }
@@ -821,7 +821,7 @@ private:
       }
       in->stream->select(ids);
       std::vector<BagReader::Message> messages;
-      while (in->stream->nextChunk(&messages))
+      while (in->stream->next(&messages))
       {
         for (const BagReader::Message& m : messages)
         {
@@ -1049,7 +1049,7 @@ Input openInput(const Options& options)
   try
   {
     input.stream = std::make_unique<BagReader>(options.in);
-    if (input.stream->chunksInTimeOrder())
+    if (input.stream->usable())
     {
       return input;
     }

@@ -1,8 +1,9 @@
 // BagReader without a master: on bags written by rosbag itself (uncompressed, LZ4, BZ2, small
-// chunks, several topics, times tied across topics and out of order inside a chunk) it gives
-// the messages of the selected connections exactly as rosbag::View gives them: each topic's
-// sequence of times and bytes the same, and the whole in time order. Chunks that overlap in
-// time are said (chunksInTimeOrder), and a cut or garbled file throws BagFormatError.
+// chunks, several topics, times tied across topics and out of order inside a chunk and across
+// chunks, a bag written topic after topic) it gives the messages of the selected connections
+// exactly as rosbag::View gives them: each topic's sequence of times and bytes the same, and the
+// whole in time order. More overlapping chunks than it holds are said (usable), and a cut or
+// garbled file throws BagFormatError.
 #include <cstdint>
 #include <fstream>
 #include <iterator>
@@ -94,11 +95,11 @@ std::vector<Read> readWithView(const std::string& path, const std::vector<std::s
   return out;
 }
 
-/// BagReader over the connections of `topics`; *chunks: how many nextChunk() gave.
+/// BagReader over the connections of `topics`; *chunks: how many times next() gave messages.
 std::vector<Read> readWithReader(const std::string& path, const std::vector<std::string>& topics, int* chunks = nullptr)
 {
   BagReader reader(path);
-  EXPECT_TRUE(reader.chunksInTimeOrder());
+  EXPECT_TRUE(reader.usable());
   std::map<std::uint32_t, std::string> topic_of;
   std::vector<std::uint32_t> ids;
   for (const BagReader::Connection& c : reader.connections())
@@ -111,7 +112,7 @@ std::vector<Read> readWithReader(const std::string& path, const std::vector<std:
   std::vector<Read> out;
   std::vector<BagReader::Message> messages;
   int given = 0;
-  while (reader.nextChunk(&messages))
+  while (reader.next(&messages))
   {
     ++given;
     for (const BagReader::Message& m : messages)
@@ -150,17 +151,48 @@ TEST(BagReader, GivesWhatRosbagViewGives)
   for (const auto compression :
        { rosbag::compression::Uncompressed, rosbag::compression::LZ4, rosbag::compression::BZ2 })
   {
-    // Small chunks (many, times rising from one to the next); one chunk, times out of order in it.
+    // Many small chunks and one large one; times rising, or every 7th 20 ms back (across the
+    // small chunks' boundaries too, which then overlap in time).
     for (const std::uint32_t threshold : { 1024u, 4096u * 1024u })
     {
-      SCOPED_TRACE("compression " + std::to_string(compression) + ", chunks of " + std::to_string(threshold));
-      TempBag bag;
-      writeBag(bag.path, compression, threshold, recordedTimes(3000, threshold > 1024u), 7 + threshold);
-      expectAsView(bag.path, kTopics);
-      expectAsView(bag.path, { "/b" });
-      expectAsView(bag.path, { "/a", "/c" });
+      for (const bool back_steps : { false, true })
+      {
+        SCOPED_TRACE("compression " + std::to_string(compression) + ", chunks of " + std::to_string(threshold) +
+                     (back_steps ? ", steps back" : ""));
+        TempBag bag;
+        writeBag(bag.path, compression, threshold, recordedTimes(3000, back_steps), 7 + threshold);
+        expectAsView(bag.path, kTopics);
+        expectAsView(bag.path, { "/b" });
+        expectAsView(bag.path, { "/a", "/c" });
+      }
     }
   }
+}
+
+TEST(BagReader, MergesABagWrittenTopicAfterTopic)
+{
+  // As a conversion from files per sensor writes it: every chunk of /a, then every one of /b and
+  // /c, so that three chunks cover each time.
+  TempBag bag;
+  {
+    rosbag::Bag out(bag.path, rosbag::bagmode::Write);
+    out.setChunkThreshold(2048);
+    const std::vector<ros::Time> times = recordedTimes(2000);
+    for (const std::string& topic : kTopics)
+    {
+      for (std::size_t i = 0; i < times.size(); i += 2)
+      {
+        std_msgs::String message;
+        message.data = topic + std::to_string(i);
+        out.write(topic, times[i], message);
+      }
+    }
+  }
+  int chunks = 0;
+  EXPECT_EQ(readWithReader(bag.path, kTopics, &chunks).size(), 3000u);
+  EXPECT_GT(chunks, 30);
+  expectAsView(bag.path, kTopics);
+  expectAsView(bag.path, { "/c", "/a" });
 }
 
 TEST(BagReader, SkipsChunksWithoutTheSelectedConnections)
@@ -182,21 +214,31 @@ TEST(BagReader, SkipsChunksWithoutTheSelectedConnections)
   expectAsView(bag.path, { "/c" });
 }
 
-TEST(BagReader, SaysWhenChunksOverlapInTime)
+TEST(BagReader, SaysWhenMoreChunksOverlapThanItHolds)
 {
-  TempBag bag;
-  std::vector<ros::Time> times = recordedTimes(400);
-  times.push_back(ros::Time(999.0));  // in a chunk after those of later times
-  writeBag(bag.path, rosbag::compression::Uncompressed, 1024, times, 3);
-  BagReader reader(bag.path);
-  EXPECT_FALSE(reader.chunksInTimeOrder());
-  std::vector<std::uint32_t> ids;
-  for (const BagReader::Connection& c : reader.connections())
-    ids.push_back(c.id);
-  reader.select(ids);
-  std::vector<BagReader::Message> messages;
-  EXPECT_FALSE(reader.nextChunk(&messages));
-  EXPECT_TRUE(messages.empty());
+  // One message per chunk, all at the same time: every chunk covers it.
+  for (const int chunks : { BagReader::kMaxOpenChunks, BagReader::kMaxOpenChunks + 1 })
+  {
+    TempBag bag;
+    {
+      rosbag::Bag out(bag.path, rosbag::bagmode::Write);
+      out.setChunkThreshold(1);
+      std_msgs::String message;
+      for (int i = 0; i < chunks; ++i)
+        out.write("/a", ros::Time(1000.0), message);
+    }
+    BagReader reader(bag.path);
+    EXPECT_EQ(reader.usable(), chunks <= BagReader::kMaxOpenChunks) << chunks << " chunks";
+    std::vector<std::uint32_t> ids;
+    for (const BagReader::Connection& c : reader.connections())
+      ids.push_back(c.id);
+    reader.select(ids);
+    std::vector<BagReader::Message> messages;
+    std::size_t read = 0;
+    while (reader.next(&messages))
+      read += messages.size();
+    EXPECT_EQ(read, reader.usable() ? static_cast<std::size_t>(chunks) : 0u);
+  }
 }
 
 TEST(BagReader, ThrowsOnACutOrGarbledFile)
@@ -217,7 +259,7 @@ TEST(BagReader, ThrowsOnACutOrGarbledFile)
     reader.select(ids);
     std::vector<BagReader::Message> messages;
     std::size_t read = 0;
-    while (reader.nextChunk(&messages))
+    while (reader.next(&messages))
       read += messages.size();
     return read;
   };

@@ -1,26 +1,28 @@
 // BagReader: reads the messages of chosen connections of an indexed rosbag (format 2.0) in time
-// order, one chunk at a time, with two reads of the file per chunk. rosbag::View parses every
-// message record's header into a map, keeps every index entry of the bag in a tree and merges
-// the connections through a heap; a tool that reads a whole recording once needs none of that
-// when the recording's chunks follow one another in time (as `rosbag record` writes them).
+// order, a chunk at a time, with two reads of the file per chunk, holding only the chunks that
+// overlap the time it is at. rosbag::View reads the whole bag's index at open, keeps every entry
+// in a tree, parses every message record's header into a map and merges the connections through a
+// heap; a tool that reads a whole recording once needs none of that.
 //
 //   BagReader in(path);
-//   if (in.chunksInTimeOrder())
+//   if (in.usable())
 //   {
 //     in.select({ imu_connection_id });
 //     std::vector<BagReader::Message> messages;
-//     while (in.nextChunk(&messages))
+//     while (in.next(&messages))
 //       for (const BagReader::Message& m : messages) ...  // m.data valid until the next call
 //   }
 //
-// The order is rosbag::View's: each connection's messages sorted by time, ties in file order,
-// and the connections merged by time (ties between connections in file order, which View leaves
-// to its heap). Every length and offset read from the file is checked against what holds it;
-// a file that does not match them throws BagFormatError (what is wrong, and where).
+// The order is rosbag::View's: each connection's messages sorted by time, ties in the order of
+// their chunks' info records and then of their places in the chunk, and the connections merged by
+// time (ties between connections in that same order, which View leaves to its heap). Every
+// length and offset read from the file is checked against what holds it; a file that does not
+// match them throws BagFormatError (what is wrong, and where).
 #pragma once
 
 #include <cstdint>
 #include <map>
+#include <memory>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -76,22 +78,25 @@ public:
     return end_;
   }
 
-  /// Whether reading the chunks in file order gives the messages in time order: the chunks lie
-  /// in the file in the order of their info records, and none starts before one before it ends;
-  /// and the bag is not encrypted. Where not, nextChunk() reads nothing (a reader that merges
-  /// the chunks is needed: rosbag's).
-  bool chunksInTimeOrder() const
+  /// At most this many chunks are held at once: where more overlap in time, usable() is false.
+  static constexpr int kMaxOpenChunks = 64;
+
+  /// Whether next() reads this bag: it is not encrypted (rosbag decrypts with a plugin), and no
+  /// more than kMaxOpenChunks of its chunks overlap in time (each is read whole and held while a
+  /// message of it is still to come; as `rosbag record` writes a bag, none overlap). Where not,
+  /// next() reads nothing: rosbag's reader is needed.
+  bool usable() const
   {
-    return in_time_order_;
+    return usable_;
   }
 
-  /// The connections (by id) whose messages nextChunk() gives from here, from the first chunk on;
-  /// none before this is called.
+  /// The connections (by id) whose messages next() gives from here, from the first on; none
+  /// before this is called.
   void select(const std::vector<std::uint32_t>& ids);
 
-  /// The selected messages of the next chunk holding any, in time order (ties in file order);
-  /// false after the last. Their data lies in the reader's buffer, valid until the next call.
-  bool nextChunk(std::vector<Message>* messages);
+  /// The next selected messages in time order (ties as above), a chunk's worth or so; false after
+  /// the last. Their data lies in the reader's buffers, valid until the next call.
+  bool next(std::vector<Message>* messages);
 
 private:
   struct ChunkInfo
@@ -107,25 +112,38 @@ private:
     std::uint32_t connection;
   };
 
+  /// An open chunk: its bytes, and its selected messages in order, `next` the first not given.
+  struct Cursor
+  {
+    std::string record, plain;  ///< as read (and the index records after it); decompressed
+    std::vector<Message> messages;
+    std::size_t next = 0;
+    std::size_t chunk = 0;  ///< its info record's index
+  };
+
   /// `size` bytes at `offset` of the file into *out; BagFormatError where the file ends before.
   void readAt(std::uint64_t offset, std::size_t size, std::string* out) const;
   void readIndex();
-  /// Reads the chunk of info `k` and the index records after it; its selected messages into
-  /// *messages.
-  void readChunk(std::size_t k, std::vector<Message>* messages);
+  /// Reads the chunk of info `k` and the index records after it into an open Cursor.
+  void openChunk(std::size_t k);
+  /// Moves next_chunk_ past chunks that hold none of the selected connections.
+  void skipUnselected();
 
   std::string path_;
   int fd_ = -1;
   std::uint64_t file_size_ = 0;
   std::uint64_t index_position_ = 0;
   std::vector<Connection> connections_;
-  std::vector<ChunkInfo> chunks_;
+  std::vector<ChunkInfo> chunks_;         ///< in the order of their info records
+  std::vector<std::uint64_t> positions_;  ///< the chunks' places in the file, rising
+  std::vector<std::size_t> order_;        ///< chunks by start time (ties in info order)
   ros::Time begin_, end_;
-  bool in_time_order_ = false;
-  std::vector<std::uint32_t> selected_;  ///< connection ids, sorted
-  std::size_t next_chunk_ = 0;
+  bool usable_ = false;
+  std::vector<std::uint32_t> selected_;                ///< connection ids, sorted
+  std::size_t next_chunk_ = 0;                         ///< in order_: the next to open
+  std::vector<std::unique_ptr<Cursor>> open_, spare_;  ///< spare_: buffers to reuse
   // Buffers reused from chunk to chunk.
-  std::string header_, record_, plain_;
+  std::string header_;
   std::vector<Entry> entries_;
 };
 }  // namespace periodic_bias_compensation
