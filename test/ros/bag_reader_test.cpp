@@ -132,6 +132,20 @@ std::map<std::string, std::vector<std::pair<ros::Time, std::vector<std::uint8_t>
   return out;
 }
 
+/// How many messages *reader gives of all its connections.
+std::size_t countAll(BagReader* reader)
+{
+  std::vector<std::uint32_t> ids;
+  for (const BagReader::Connection& c : reader->connections())
+    ids.push_back(c.id);
+  reader->select(ids);
+  std::vector<BagReader::Message> messages;
+  std::size_t read = 0;
+  while (reader->next(&messages))
+    read += messages.size();
+  return read;
+}
+
 void expectAsView(const std::string& path, const std::vector<std::string>& topics)
 {
   const std::vector<Read> view = readWithView(path, topics);
@@ -229,15 +243,7 @@ TEST(BagReader, SaysWhenMoreChunksOverlapThanItHolds)
     }
     BagReader reader(bag.path);
     EXPECT_EQ(reader.usable(), chunks <= BagReader::kMaxOpenChunks) << chunks << " chunks";
-    std::vector<std::uint32_t> ids;
-    for (const BagReader::Connection& c : reader.connections())
-      ids.push_back(c.id);
-    reader.select(ids);
-    std::vector<BagReader::Message> messages;
-    std::size_t read = 0;
-    while (reader.next(&messages))
-      read += messages.size();
-    EXPECT_EQ(read, reader.usable() ? static_cast<std::size_t>(chunks) : 0u);
+    EXPECT_EQ(countAll(&reader), reader.usable() ? static_cast<std::size_t>(chunks) : 0u);
   }
 }
 
@@ -253,24 +259,15 @@ TEST(BagReader, ThrowsOnACutOrGarbledFile)
       out << bytes;
     }
     BagReader reader(bag.path);
-    std::vector<std::uint32_t> ids;
-    for (const BagReader::Connection& c : reader.connections())
-      ids.push_back(c.id);
-    reader.select(ids);
-    std::vector<BagReader::Message> messages;
-    std::size_t read = 0;
-    while (reader.next(&messages))
-      read += messages.size();
-    return read;
+    return countAll(&reader);
   };
   EXPECT_EQ(readAll(original), 300u);
   // Cut anywhere: the index is gone or points past the end.
   for (const std::size_t keep : { std::size_t{ 10 }, std::size_t{ 4200 }, original.size() / 2, original.size() - 5 })
     EXPECT_THROW(readAll(original.substr(0, keep)), BagFormatError) << "cut to " << keep << " bytes";
-  // Every 4-byte length or offset field the reader trusts, garbled in turn (a sweep over the
-  // file in steps that hit each record header and index entry at some point): it either reads
-  // a bag or throws BagFormatError, and reads nothing outside its buffers (the sanitizer build
-  // runs this too).
+  // Four bytes set to 0xff every 61 bytes across the file, one place at a time (record and field
+  // lengths, header fields, index entries, message data): it either reads a bag or throws
+  // BagFormatError, and reads nothing outside its buffers (the sanitizer build runs this too).
   int thrown = 0;
   for (std::size_t at = 13; at + 4 <= original.size(); at += 61)
   {
