@@ -12,18 +12,13 @@
 #include <bzlib.h>
 #include <roslz4/lz4s.h>
 
+#include "bag_format.h"
+
 namespace periodic_bias_compensation
 {
 namespace
 {
-/// Little-endian u32 at p.
-std::uint32_t u32(const char* p)
-{
-  return static_cast<std::uint32_t>(static_cast<unsigned char>(p[0])) |
-         (static_cast<std::uint32_t>(static_cast<unsigned char>(p[1])) << 8) |
-         (static_cast<std::uint32_t>(static_cast<unsigned char>(p[2])) << 16) |
-         (static_cast<std::uint32_t>(static_cast<unsigned char>(p[3])) << 24);
-}
+using namespace bag_format;
 
 /// The fields of a record header that the structure check uses (raw values; empty if absent).
 struct RecordFields
@@ -32,9 +27,6 @@ struct RecordFields
   std::string index_pos, conn_count, chunk_count, chunk_pos;  ///< file header, chunk info
 };
 
-constexpr char kOpMessage = '\x02', kOpFileHeader = '\x03', kOpIndexData = '\x04', kOpChunk = '\x05',
-               kOpChunkInfo = '\x06', kOpConnection = '\x07';
-
 /// Little-endian u64 of an 8-byte field, or nothing.
 std::optional<std::uint64_t> u64(const std::string& field)
 {
@@ -42,7 +34,7 @@ std::optional<std::uint64_t> u64(const std::string& field)
   {
     return std::nullopt;
   }
-  return static_cast<std::uint64_t>(u32(field.data())) | (static_cast<std::uint64_t>(u32(field.data() + 4)) << 32);
+  return bag_format::u64(field.data());
 }
 
 /// Where rosbag goes by offsets it reads from the file: the file header's index_pos must be the
@@ -239,7 +231,7 @@ std::string checkIndex(const RecordFields& fields, const std::string& data, std:
 std::string checkStructure(const std::string& path, bool read_chunks)
 {
   std::ifstream file(path, std::ios::binary);
-  static const std::string kMagic = "#ROSBAG V2.0\n";
+  const std::string kMagic(bag_format::kMagic);
   std::string magic(kMagic.size(), '\0');
   if (!file.read(&magic[0], static_cast<std::streamsize>(magic.size())) || magic != kMagic)
   {

@@ -10,29 +10,14 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "bag_format.h"
 #include "periodic_bias_compensation/ros/bag_check.h"
 
 namespace periodic_bias_compensation
 {
 namespace
 {
-// Record types of the rosbag 2.0 format (rosbag/constants.h).
-constexpr char kOpMessage = 0x02, kOpFileHeader = 0x03, kOpIndexData = 0x04, kOpChunk = 0x05, kOpChunkInfo = 0x06,
-               kOpConnection = 0x07;
-constexpr std::string_view kMagic = "#ROSBAG V2.0\n";
-
-std::uint32_t u32(const char* p)
-{
-  std::uint32_t value = 0;
-  for (int i = 3; i >= 0; --i)
-    value = (value << 8) | static_cast<unsigned char>(p[i]);
-  return value;
-}
-
-std::uint64_t u64(const char* p)
-{
-  return static_cast<std::uint64_t>(u32(p)) | (static_cast<std::uint64_t>(u32(p + 4)) << 32);
-}
+using namespace bag_format;
 
 ros::Time timeAt(const char* p)
 {
@@ -190,34 +175,36 @@ void BagReader::readIndex()
   std::string index;
   readAt(index_position_, file_size_ - index_position_, &index);
   std::size_t offset = 0;
-  std::map<std::uint32_t, std::size_t> connection_of;  // id -> index in connections_
-  for (std::uint64_t k = 0; k < std::uint64_t{ connection_count } + chunk_count; ++k)
-  {
-    const std::uint64_t where = index_position_ + offset;
+  // The connection records, then the chunk info records.
+  const auto nextRecord = [&index, &offset, this](char op, const char* what, std::uint64_t* where) {
+    *where = index_position_ + offset;
     const Record record = recordAt(index, offset, index_position_);
     offset = record.end;
-    const char op = opOf(record.header, where);
-    if (k < connection_count)
-    {
-      if (op != kOpConnection)
-        throw BagFormatError("record" + at(where) + " is not the connection record the file header announces");
-      Connection c;
-      c.id = u32(fixedField(record.header, where, "conn", 4).data());
-      forEachField(record.header, where, [&c](std::string_view name, std::string_view value) {
-        if (name == "topic")
-          c.topic.assign(value);
-      });
-      forEachField(record.data, where, [&c](std::string_view name, std::string_view value) {
-        c.header.emplace(std::string(name), std::string(value));
-      });
-      connections_.push_back(std::move(c));
-      continue;
-    }
-    if (connection_of.empty())
-      for (std::size_t i = 0; i < connections_.size(); ++i)
-        connection_of.emplace(connections_[i].id, i);
-    if (op != kOpChunkInfo)
-      throw BagFormatError("record" + at(where) + " is not the chunk info record the file header announces");
+    if (opOf(record.header, *where) != op)
+      throw BagFormatError("record" + at(*where) + " is not the " + what + " record the file header announces");
+    return record;
+  };
+  std::map<std::uint32_t, std::size_t> connection_of;  // id -> index in connections_
+  for (std::uint32_t k = 0; k < connection_count; ++k)
+  {
+    std::uint64_t where = 0;
+    const Record record = nextRecord(kOpConnection, "connection", &where);
+    Connection c;
+    c.id = u32(fixedField(record.header, where, "conn", 4).data());
+    forEachField(record.header, where, [&c](std::string_view name, std::string_view value) {
+      if (name == "topic")
+        c.topic.assign(value);
+    });
+    forEachField(record.data, where, [&c](std::string_view name, std::string_view value) {
+      c.header.emplace(std::string(name), std::string(value));
+    });
+    connection_of.emplace(c.id, connections_.size());
+    connections_.push_back(std::move(c));
+  }
+  for (std::uint32_t k = 0; k < chunk_count; ++k)
+  {
+    std::uint64_t where = 0;
+    const Record record = nextRecord(kOpChunkInfo, "chunk info", &where);
     ChunkInfo chunk;
     chunk.position = u64(fixedField(record.header, where, "chunk_pos", 8).data());
     chunk.start = timeAt(fixedField(record.header, where, "start_time", 8).data());

@@ -12,14 +12,14 @@
 #include <bzlib.h>
 #include <roslz4/lz4s.h>
 
+#include "bag_format.h"
+
 namespace periodic_bias_compensation
 {
 namespace
 {
-// Record types and sizes of the rosbag 2.0 format (rosbag/constants.h).
-constexpr std::uint8_t kOpMessage = 0x02, kOpFileHeader = 0x03, kOpIndexData = 0x04, kOpChunk = 0x05,
-                       kOpChunkInfo = 0x06, kOpConnection = 0x07;
-constexpr char kMagic[] = "#ROSBAG V2.0\n";
+using namespace bag_format;
+// Record sizes of the rosbag 2.0 format (rosbag/constants.h).
 constexpr std::uint32_t kFileHeaderLength = 4096;  ///< header + padding of the file header record
 constexpr std::uint32_t kIndexVersion = 1, kChunkInfoVersion = 1;
 constexpr int kLz4BlockSizeId = 6;  ///< as rosbag's LZ4 stream
@@ -139,7 +139,7 @@ BagWriter::BagWriter(const std::string& path, Compression compression, bool back
     }
   }
   chunk_.data.reserve(chunk_threshold_ + 64 * 1024);
-  writeBytes(kMagic, sizeof kMagic - 1);
+  writeBytes(kMagic.data(), kMagic.size());
   const std::vector<std::uint8_t> header = fileHeader(0);
   writeBytes(header.data(), header.size());
   if (background)
@@ -417,7 +417,7 @@ void BagWriter::close()
     writeAll(block_.get() + whole, tail);
   }
   const std::vector<std::uint8_t> header = fileHeader(index_position);
-  const ssize_t written = ::pwrite(fd_, header.data(), header.size(), sizeof kMagic - 1);
+  const ssize_t written = ::pwrite(fd_, header.data(), header.size(), static_cast<off_t>(kMagic.size()));
   if (written != static_cast<ssize_t>(header.size()))
   {
     if (written >= 0)

@@ -619,6 +619,14 @@ private:
     return message;
   }
 
+  /// A message rosbag reads (MessageInstance::write reads it from the bag) as its bytes.
+  static void copyBytes(const rosbag::MessageInstance& m, std::vector<std::uint8_t>* bytes)
+  {
+    bytes->resize(m.size());
+    ros::serialization::OStream stream(bytes->data(), m.size());
+    m.write(stream);
+  }
+
   /// In the reading thread: adds a message of connections[connection] to *batch, deserialised if
   /// it is an IMU message, else as a copy of its bytes.
   static void addMessage(const InputConnection& connection, std::size_t index, const ros::Time& time,
@@ -677,10 +685,8 @@ private:
             throw std::runtime_error("a message of topic '" + m.getTopic() + "' has no connection record");
           }
         }
-        // Its bytes (MessageInstance::write reads them from the bag), then handled as BagReader's.
-        at->bytes.resize(m.size());
-        ros::serialization::OStream stream(at->bytes.data(), m.size());
-        m.write(stream);
+        // Its bytes, then handled as BagReader's.
+        copyBytes(m, &at->bytes);
         addMessage(connections[last], last, m.getTime(), at->bytes.data(), m.size(), batch);
       }
       return position == *at->end;
@@ -848,10 +854,8 @@ private:
       {
         throw std::runtime_error("a message of topic '" + m.getTopic() + "' has no connection record");
       }
-      bytes.resize(m.size());
-      ros::serialization::OStream stream(bytes.data(), static_cast<std::uint32_t>(bytes.size()));
-      m.write(stream);
-      if (!visit(m.getTime(), **c, bytes.data(), static_cast<std::uint32_t>(bytes.size())))
+      copyBytes(m, &bytes);
+      if (!visit(m.getTime(), **c, bytes.data(), m.size()))
       {
         return;
       }
