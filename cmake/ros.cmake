@@ -17,7 +17,8 @@ add_library(${PROJECT_NAME}_ros
   src/ros/bag_check.cpp
   src/ros/bag_reader.cpp
   src/ros/compensator_ros.cpp
-  src/ros/bag_writer.cpp)
+  src/ros/bag_writer.cpp
+  src/ros/callback_thread.cpp)
 # roslz4 and bz2: BagWriter compresses chunks itself, the bag check decompresses them as rosbag
 # will (not exported by rosbag_storage).
 target_link_libraries(${PROJECT_NAME}_ros ${PROJECT_NAME}_parameters ${PROJECT_NAME}_core ${catkin_LIBRARIES}
@@ -130,4 +131,9 @@ if(CATKIN_ENABLE_TESTING)
   add_dependencies(test_manager_restart ${PROJECT_NAME}_nodelet ${PROJECT_NAME}_generate_messages_cpp)
   # The same check on the stand-alone nodelet of compensator.launch (respawn:=true) killed.
   add_rostest(test/ros/manager_restart_standalone.test DEPENDENCIES test_manager_restart)
+
+  # The nodelet unloaded and loaded again into a running manager while 1 kHz data flows.
+  add_rostest_gtest(test_nodelet_unload test/ros/nodelet_unload.test test/ros/nodelet_unload.cpp)
+  target_link_libraries(test_nodelet_unload ${catkin_LIBRARIES})
+  add_dependencies(test_nodelet_unload ${PROJECT_NAME}_nodelet ${PROJECT_NAME}_generate_messages_cpp)
 endif()

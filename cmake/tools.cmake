@@ -28,7 +28,7 @@ target_link_libraries(core_latency ${PROJECT_NAME}_core ${PROJECT_NAME}_sim)
 # Speed of the ROS side (scripts/bench.py, not tests): the nodelet's input rate and latency, in the
 # same manager as a publisher or as a separate process, and the floor of compensate_bag's speed.
 add_executable(nodelet_benchmark EXCLUDE_FROM_ALL test/bench/nodelet_benchmark.cpp)
-target_link_libraries(nodelet_benchmark ${PROJECT_NAME}_sim_ros ${catkin_LIBRARIES})
+target_link_libraries(nodelet_benchmark ${PROJECT_NAME}_sim_ros ${PROJECT_NAME}_ros ${catkin_LIBRARIES})
 add_dependencies(nodelet_benchmark ${PROJECT_NAME}_nodelet compensator_node)
 add_executable(bag_read_floor EXCLUDE_FROM_ALL test/bench/bag_read_floor.cpp)
 target_link_libraries(bag_read_floor ${catkin_LIBRARIES})

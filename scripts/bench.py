@@ -237,9 +237,9 @@ class Bench:
         return dict(kv.split('=', 1) for kv in r.stdout.decode().split('\0') if '=' in kv)
 
     def nodelet_side_by_side(self):
-        """The compensator, the harness's own relay and imu_tools' Madgwick nodelet in the same
-        harness, in-process, paced at 100 Hz, 1 kHz and 2.8 kHz: latency and the process's CPU time
-        per message."""
+        """The compensator (imu/data on its own thread, then on the manager's queues), the harness's
+        own relay and imu_tools' Madgwick nodelet in the same harness, in-process, paced at 100 Hz,
+        1 kHz and 2.8 kHz: latency and the process's CPU time per message."""
         madgwick = self.madgwick_env()
         log('nodelet side by side: 100 Hz, 1 kHz, 2.8 kHz, with the relay' + (' and Madgwick' if madgwick else ''))
         runs = []
@@ -247,6 +247,8 @@ class Bench:
                                      ('2.8 kHz', 2800, self.side_fast_s)):
             runs.append(self.nodelet_run(label, 'intra', '--rate', rate, '--duration', seconds,
                                          group='side-by-side'))
+            runs.append(self.nodelet_run(label, 'intra', '--rate', rate, '--duration', seconds,
+                                         '--manager-queues', group='side-by-side'))
             runs.append(self.nodelet_run(label, 'intra', '--rate', rate, '--duration', seconds,
                                          '--nodelet', 'relay', group='side-by-side'))
             if madgwick:

@@ -130,13 +130,25 @@ CompensatorRos::CompensatorRos(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh
   reconfigure_server_ = std::make_unique<dynamic_reconfigure::Server<TuningConfig>>(mutex_, pnh_);
   reconfigure_server_->setCallback([this](TuningConfig& config, uint32_t level) { reconfigure(config, level); });
 
-  imu_sub_ = nh_.subscribe("imu/data", kImuQueue, &CompensatorRos::imuCallback, this, imuTransport());
+  ros::SubscribeOptions imu_options;
+  imu_options.init<sensor_msgs::Imu>("imu/data", kImuQueue,
+                                     [this](const sensor_msgs::Imu::ConstPtr& msg) { imuCallback(msg); });
+  imu_options.transport_hints = imuTransport();
+  if (params_.ros.imu_thread)
+  {
+    imu_thread_ = std::make_unique<CallbackThread>();
+    imu_options.callback_queue = imu_thread_->queue();
+  }
+  imu_sub_ = nh_.subscribe(imu_options);
   ROS_INFO("bias compensation (%s mode) listening on %s, publishing %s and %s", toString(params_.core.mode).c_str(),
            imu_sub_.getTopic().c_str(), filtered_pub_.getTopic().c_str(), wave_pub_.getTopic().c_str());
 }
 
 CompensatorRos::~CompensatorRos()
 {
+  // No sample after this (one being handled on imu_thread_ is waited for): the members it uses
+  // go before imu_sub_ would.
+  imu_sub_.shutdown();
   if (listener_release_.joinable())
   {
     listener_release_.join();

@@ -90,25 +90,33 @@ def nodelet_markdown(runs):
     print()
     side = [(r['label'], r['fields']) for r in runs if r.get('group') == 'side-by-side']
     if side:
-        print('Side by side in the same harness, in-process, paced: the compensator, the harness\'s '
-              '`relay` (a nodelet that subscribes and publishes as the compensator\'s does and answers '
-              'each input with an empty odometry carrying its stamp: the manager\'s threads and queues '
-              'alone, the floor of any nodelet measured here) and imu_tools\' Madgwick filter nodelet '
-              '(imu_filter_madgwick/ImuFilterNodelet, accelerometer and gyro, its imu/data the answer). '
-              'CPU time per message: the whole process (publisher, callback queues and the nodelet) '
+        print('Side by side in the same harness, in-process, paced: the compensator (imu/data on a '
+              'thread of its own, its default; `manager\'s queues`: `imu_thread: false`), the harness\'s '
+              '`relay` (a nodelet that subscribes and publishes as the compensator\'s does, on a thread '
+              'of its own, and answers each input with an empty odometry carrying its stamp: the '
+              'threads and queues alone, the floor of any nodelet measured here) and imu_tools\' Madgwick '
+              'filter nodelet (imu_filter_madgwick/ImuFilterNodelet on the manager\'s queues, accelerometer '
+              'and gyro, its imu/data the answer). The harness receives every answer on a thread of its '
+              'own. CPU time per message: the whole process (publisher, callback queues and the nodelet) '
               'over the messages sent.' + _side_length(side))
         print()
         print('| nodelet | input | sent | dropped | latency p50 [us] | p99 [us] | max [us] | CPU per message [us] |')
         print('|---|---|---|---|---|---|---|---|')
         for label, f in side:
             print('| %s | %s | %s | %s | %.0f | %.0f | %.0f | %.1f |' % (
-                f.get('nodelet', 'compensator'), label, f['sent'], f['dropped'], float(f['p50_us']),
+                _side_name(f), label, f['sent'], f['dropped'], float(f['p50_us']),
                 float(f['p99_us']), float(f['max_us']), float(f.get('cpu_us_per_msg', 'nan'))))
         if not any(f.get('nodelet') == 'madgwick' for _, f in side):
             print()
             print('Madgwick not measured in this run (no built imu_tools given: `--imu-tools DEVEL`).')
         print()
     return '\n'.join(out)
+
+
+def _side_name(f):
+    """A side-by-side row's nodelet, and where its input is served when that is not the default."""
+    name = f.get('nodelet', 'compensator')
+    return name + ", manager's queues" if f.get('queues') == 'manager' else name
 
 
 def _side_length(side):

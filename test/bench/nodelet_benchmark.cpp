@@ -4,7 +4,7 @@
 //
 //   nodelet_benchmark --transport intra|tcp --scenario FILE.yaml --rate HZ --duration S
 //                     [--closed-loop] [--stream] [--rss-csv FILE] [--rss-every N]
-//                     [--nodelet compensator|madgwick|relay]
+//                     [--nodelet compensator|madgwick|relay] [--manager-queues]
 //
 // This program is the nodelet manager: a nodelet::Loader holding BenchSource (below) and, for
 // `intra`, the compensator nodelet loaded through pluginlib as `nodelet load` would. BenchSource
@@ -22,6 +22,9 @@
 // publishes as the compensator's does and answers each imu/data with an odometry/filtered
 // carrying its stamp and nothing else, intra-process only. Its latency and CPU time are what
 // the manager's threads and queues cost with no estimator at all.
+// The compensator and the relay serve imu/data on a thread of their own (the compensator's
+// ~imu_thread, its default); --manager-queues puts it on the manager's queues instead. The
+// harness receives the answers on a thread of its own in every case.
 // Output: one line of key=value pairs on stdout.
 #include <algorithm>
 #include <array>
@@ -49,6 +52,7 @@
 #include <unistd.h>
 #include <pluginlib/class_loader.hpp>
 
+#include "periodic_bias_compensation/ros/callback_thread.h"
 #include "periodic_bias_compensation/ros/compensator_ros.h"
 #include "periodic_bias_compensation/ros/sim_messages.h"
 #include "periodic_bias_compensation/sim/simulator.h"
@@ -76,6 +80,7 @@ struct Options
   std::string rss_csv;
   std::int64_t rss_every = 6000;
   std::string nodelet = "compensator";  ///< the nodelet measured: compensator, madgwick or relay
+  bool manager_queues = false;          ///< the measured nodelet's imu/data on the manager's queues
 };
 
 /// The nodelet measured: its plugin type and the topics it reads and answers on.
@@ -100,12 +105,31 @@ const Measured& measured(const Options& o)
 /// hints, a shared pointer published from the callback) with an empty odometry as the answer.
 class Relay : public nodelet::Nodelet
 {
+public:
+  explicit Relay(bool manager_queues) : manager_queues_(manager_queues)
+  {
+  }
+
+  ~Relay() override
+  {
+    sub_.shutdown();  // before its thread goes
+  }
+
+private:
   void onInit() override
   {
     ros::NodeHandle nh = getNodeHandle();
     pub_ = nh.advertise<nav_msgs::Odometry>(kRelay.output, pbc::CompensatorRos::kOutputQueue);
-    sub_ = nh.subscribe(kRelay.input, pbc::CompensatorRos::kImuQueue, &Relay::imuCallback, this,
-                        pbc::CompensatorRos::imuTransport());
+    ros::SubscribeOptions options;
+    options.init<sensor_msgs::Imu>(kRelay.input, pbc::CompensatorRos::kImuQueue,
+                                   [this](const sensor_msgs::Imu::ConstPtr& imu) { imuCallback(imu); });
+    options.transport_hints = pbc::CompensatorRos::imuTransport();
+    if (!manager_queues_)
+    {
+      thread_ = std::make_unique<pbc::CallbackThread>();
+      options.callback_queue = thread_->queue();
+    }
+    sub_ = nh.subscribe(options);
   }
 
   void imuCallback(const sensor_msgs::Imu::ConstPtr& imu)
@@ -115,6 +139,8 @@ class Relay : public nodelet::Nodelet
     pub_.publish(odometry);
   }
 
+  bool manager_queues_;
+  std::unique_ptr<pbc::CallbackThread> thread_;
   ros::Publisher pub_;
   ros::Subscriber sub_;
 };
@@ -287,7 +313,9 @@ public:
               << " p99_us=" << latency_.quantile(0.99) * 1e6 << " p999_us=" << latency_.quantile(0.999) * 1e6
               << " max_us=" << max_latency_ * 1e6 << " max_at_s=" << max_at_
               << " cpu_us_per_msg=" << cpu_per_message * 1e6 << " rss_kb=" << rssKilobytes()
-              << " nodelet=" << options_.nodelet << std::endl;
+              << " nodelet=" << options_.nodelet
+              << " queues=" << (options_.manager_queues || options_.nodelet == "madgwick" ? "manager" : "own")
+              << std::endl;
     if (!options_.rss_csv.empty())
     {
       std::ofstream csv(options_.rss_csv);
@@ -314,12 +342,16 @@ private:
     ros::NodeHandle nh = getNodeHandle();
     const Measured& m = measured(options_);
     pub_ = nh.advertise<sensor_msgs::Imu>(m.input, 1000);
+    ros::SubscribeOptions subscription;
     if (options_.nodelet == "madgwick")
-      sub_ = nh.subscribe<sensor_msgs::Imu>(m.output, 10000, &BenchSource::outputCallback<sensor_msgs::Imu>, this,
-                                            ros::TransportHints().tcpNoDelay());
+      subscription.init<sensor_msgs::Imu>(m.output, 10000,
+                                          [this](const sensor_msgs::Imu::ConstPtr& msg) { outputCallback(msg); });
     else
-      sub_ = nh.subscribe<nav_msgs::Odometry>(m.output, 10000, &BenchSource::outputCallback<nav_msgs::Odometry>, this,
-                                              ros::TransportHints().tcpNoDelay());
+      subscription.init<nav_msgs::Odometry>(m.output, 10000,
+                                            [this](const nav_msgs::Odometry::ConstPtr& msg) { outputCallback(msg); });
+    subscription.transport_hints = ros::TransportHints().tcpNoDelay();
+    subscription.callback_queue = receiver_.queue();
+    sub_ = nh.subscribe(subscription);
     thread_ = std::thread([this] { run(); });
   }
 
@@ -406,6 +438,7 @@ private:
 
   Options options_;
   std::unique_ptr<SampleSource> source_;
+  pbc::CallbackThread receiver_;  ///< serves sub_: the answers cost one thread wake-up, as a consumer's may
   ros::Publisher pub_;
   ros::Subscriber sub_;
   std::thread thread_;
@@ -427,7 +460,7 @@ private:
 const char* kUsage =
     "usage: nodelet_benchmark --transport intra|tcp --scenario FILE.yaml --rate HZ --duration S\n"
     "                         [--closed-loop] [--stream] [--rss-csv FILE] [--rss-every N]\n"
-    "                         [--nodelet compensator|madgwick|relay]\n";
+    "                         [--nodelet compensator|madgwick|relay] [--manager-queues]\n";
 
 /// The options, or nothing after --help.
 std::optional<Options> parseOptions(int argc, char** argv)
@@ -442,13 +475,18 @@ std::optional<Options> parseOptions(int argc, char** argv)
       .flag("--stream", &o.stream)
       .text("--rss-csv", &o.rss_csv)
       .integer("--rss-every", &o.rss_every)
-      .text("--nodelet", &o.nodelet);
+      .text("--nodelet", &o.nodelet)
+      .flag("--manager-queues", &o.manager_queues);
   if (!cli.parse(argc, argv))
     return std::nullopt;
   if ((o.transport != "intra" && o.transport != "tcp") || o.scenario.empty() || !(o.rate > 0.0) || !(o.duration > 0.0))
     throw pbc::UsageError("--transport intra|tcp, --scenario, --rate > 0 and --duration > 0 are required");
   if (o.nodelet != "compensator" && ((o.nodelet != "madgwick" && o.nodelet != "relay") || o.transport != "intra"))
     throw pbc::UsageError("--nodelet is compensator, madgwick or relay (the last two with --transport intra only)");
+  if (o.manager_queues && (o.nodelet == "madgwick" || o.transport != "intra"))
+    throw pbc::UsageError(
+        "--manager-queues is for the compensator or the relay with --transport intra (Madgwick's "
+        "nodelet is always on them)");
   return o;
 }
 }  // namespace
@@ -480,7 +518,7 @@ int main(int argc, char** argv)
       }
       if (type == kRelay.type)
       {
-        return boost::make_shared<Relay>();
+        return boost::make_shared<Relay>(options.manager_queues);
       }
       return plugins.createInstance(type);
     });
@@ -493,6 +531,10 @@ int main(int argc, char** argv)
       ros::param::set("/madgwick/publish_tf", false);
       ros::param::set("/madgwick/world_frame", std::string("enu"));
     }
+    // The compensator's imu/data on a thread of its own (its default) or on the manager's queues
+    // (the parameter is removed again at the end: a compensator_node started later reads its own).
+    if (options.transport == "intra")
+      ros::param::set("/compensator/imu_thread", !options.manager_queues);
     const Measured& m = measured(options);
     if (options.transport == "intra" && !manager.load("/" + options.nodelet, m.type, no_remappings, no_argv))
     {
@@ -504,6 +546,7 @@ int main(int argc, char** argv)
     }
     source->finish();
     manager.clear();
+    ros::param::del("/compensator/imu_thread");
   }
   catch (const std::exception& e)
   {

@@ -92,10 +92,14 @@ class RenderTest(unittest.TestCase):
         runs = results['sections']['nodelet']['runs']
         base = dict(runs[0]['fields'], p50_us='111', p99_us='222', max_us='333', cpu_us_per_msg='4.56')
         runs += [{'label': '2.8 kHz', 'group': 'side-by-side', 'fields': dict(base, nodelet='compensator')},
+                 {'label': '2.8 kHz', 'group': 'side-by-side',
+                  'fields': dict(base, nodelet='compensator', queues='manager', p50_us='99')},
                  {'label': '2.8 kHz', 'group': 'side-by-side', 'fields': dict(base, nodelet='relay', p50_us='55')},
                  {'label': '2.8 kHz', 'group': 'side-by-side', 'fields': dict(base, nodelet='madgwick', dropped='7')}]
         md = render(results)
         self.assertIn('| compensator | 2.8 kHz | %s | %s | 111 | 222 | 333 | 4.6 |' % (base['sent'], base['dropped']), md)
+        self.assertIn("| compensator, manager's queues | 2.8 kHz | %s | %s | 99 | 222 | 333 | 4.6 |"
+                      % (base['sent'], base['dropped']), md)
         self.assertIn('| madgwick | 2.8 kHz | %s | 7 | 111 | 222 | 333 | 4.6 |' % base['sent'], md)
         self.assertIn('| relay | 2.8 kHz | %s | %s | 55 | 222 | 333 | 4.6 |' % (base['sent'], base['dropped']), md)
         self.assertNotIn('Madgwick not measured', md)
@@ -106,7 +110,7 @@ class RenderTest(unittest.TestCase):
                              (short_runs, 'The 2.8 kHz runs last 10 s: the start-up (calibration window, first '
                                           'designs) alone.')):
             timed = copy.deepcopy(results)
-            for run in timed['sections']['nodelet']['runs'][-3:]:
+            for run in timed['sections']['nodelet']['runs'][-4:]:
                 run['fields'].update(sent=fields['sent'])
             self.assertIn(said, render(timed))
         # The side-by-side runs stay out of the transport table.

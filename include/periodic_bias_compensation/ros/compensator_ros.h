@@ -23,6 +23,7 @@
 #include "periodic_bias_compensation/CompensatorConfig.h"
 #include "periodic_bias_compensation/core/compensator.h"
 #include "periodic_bias_compensation/core/raw_integrator.h"
+#include "periodic_bias_compensation/ros/callback_thread.h"
 #include "periodic_bias_compensation/ros/conversions.h"
 #include "periodic_bias_compensation/ros/parameters.h"
 
@@ -126,6 +127,7 @@ private:
   std::thread listener_release_;                             ///< destroys tf_listener_ (releaseTransformListener)
   std::unique_ptr<tf2_ros::TransformBroadcaster> tf_broadcaster_;
 
+  std::unique_ptr<CallbackThread> imu_thread_;  ///< serves imu_sub_ when params_.ros.imu_thread
   ros::Subscriber imu_sub_;
   ros::Publisher filtered_pub_;
   ros::Publisher wave_pub_;

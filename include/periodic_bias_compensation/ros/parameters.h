@@ -30,6 +30,7 @@ struct RosOptions
   bool identity_mounting = false;        ///< the IMU is mounted aligned with base_frame: no lookup
   std::string calibration_file;          ///< constant-bias YAML; loaded at start when it exists
   double diagnostic_period = 1.0;        ///< period of /diagnostics (read by diagnostic_updater) [s]
+  bool imu_thread = true;                ///< imu/data served by a thread of its own (CallbackThread)
 
   /// False with a message naming the key when a value is out of range (rosOptionParameters())
   /// or odom_frame equals base_frame.

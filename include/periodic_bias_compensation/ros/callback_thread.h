@@ -1,0 +1,36 @@
+// A callback queue served by a thread of its own. A subscription made on it reaches its callback
+// with one thread wake-up: the thread that delivers the message (an in-process publisher, or
+// roscpp's network thread) adds it to the queue and the queue's thread runs it. A nodelet
+// manager's queues take two (its queue thread hands the nodelet's queue to a worker thread).
+#pragma once
+
+#include <atomic>
+#include <thread>
+
+#include <ros/callback_queue.h>
+
+namespace periodic_bias_compensation
+{
+class CallbackThread
+{
+public:
+  /// Starts the thread.
+  CallbackThread();
+  /// Stops the thread after the callback it is running, if any; callbacks still queued are
+  /// dropped. Shut the subscriptions made on queue() down first.
+  ~CallbackThread();
+  CallbackThread(const CallbackThread&) = delete;
+  CallbackThread& operator=(const CallbackThread&) = delete;
+
+  /// The queue to give a subscription (ros::SubscribeOptions::callback_queue).
+  ros::CallbackQueue* queue()
+  {
+    return &queue_;
+  }
+
+private:
+  ros::CallbackQueue queue_;
+  std::atomic<bool> running_{ true };
+  std::thread thread_;
+};
+}  // namespace periodic_bias_compensation
