@@ -146,8 +146,8 @@ CompensatorRos::CompensatorRos(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh
 
 CompensatorRos::~CompensatorRos()
 {
-  // No sample after this (one being handled on imu_thread_ is waited for): the members it uses
-  // go before imu_sub_ would.
+  // Samples stop first (one being handled on imu_thread_ is waited for): the members a sample
+  // uses are declared after imu_sub_ and would be destroyed before it.
   imu_sub_.shutdown();
   if (listener_release_.joinable())
   {
