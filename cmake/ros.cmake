@@ -97,6 +97,10 @@ if(CATKIN_ENABLE_TESTING)
   target_link_libraries(test_bag_writer ${PROJECT_NAME}_ros ${catkin_LIBRARIES})
 
   # The bag reader against rosbag::View on bags rosbag wrote, and on cut or garbled ones (no master).
+  # CallbackThread (the imu/data subscription's own thread), no master.
+  catkin_add_gtest(test_callback_thread test/ros/callback_thread_test.cpp)
+  target_link_libraries(test_callback_thread ${PROJECT_NAME}_ros ${catkin_LIBRARIES})
+
   catkin_add_gtest(test_bag_reader test/ros/bag_reader_test.cpp)
   target_link_libraries(test_bag_reader ${PROJECT_NAME}_ros ${catkin_LIBRARIES})
 

@@ -1,5 +1,9 @@
 #include "periodic_bias_compensation/ros/callback_thread.h"
 
+#include <pthread.h>
+
+#include <cstring>
+
 namespace periodic_bias_compensation
 {
 namespace
@@ -8,7 +12,7 @@ namespace
 constexpr double kWait = 0.1;
 }  // namespace
 
-CallbackThread::CallbackThread()
+CallbackThread::CallbackThread(const char* name)
   : thread_([this] {
       while (running_)
       {
@@ -16,6 +20,9 @@ CallbackThread::CallbackThread()
       }
     })
 {
+  char shortened[16] = {};
+  std::strncpy(shortened, name, sizeof(shortened) - 1);
+  pthread_setname_np(thread_.native_handle(), shortened);
 }
 
 CallbackThread::~CallbackThread()

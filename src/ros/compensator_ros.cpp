@@ -136,7 +136,7 @@ CompensatorRos::CompensatorRos(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh
   imu_options.transport_hints = imuTransport();
   if (params_.ros.imu_thread)
   {
-    imu_thread_ = std::make_unique<CallbackThread>();
+    imu_thread_ = std::make_unique<CallbackThread>("pbc_imu");
     imu_options.callback_queue = imu_thread_->queue();
   }
   imu_sub_ = nh_.subscribe(imu_options);

@@ -134,8 +134,8 @@ const ParameterTable<RosOptions>& rosOptionParameters()
     t.push_back(numberParameter("diagnostic_period", &R::diagnostic_period, start, above(0.0), "s",
                                 "period of the /diagnostics status"));
     t.push_back(flagParameter("imu_thread", &R::imu_thread, start,
-                              "imu/data served by a thread of its own: one thread wake-up per sample, where a "
-                              "nodelet manager's queues take two; false: the node handle's callback queue"));
+                              "imu/data served by a thread of its own (named pbc_imu): one thread wake-up per sample, "
+                              "where a nodelet manager's queues take two; false: the node handle's callback queue"));
     return t;
   }();
   return table;

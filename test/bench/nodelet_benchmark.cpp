@@ -126,7 +126,7 @@ private:
     options.transport_hints = pbc::CompensatorRos::imuTransport();
     if (!manager_queues_)
     {
-      thread_ = std::make_unique<pbc::CallbackThread>();
+      thread_ = std::make_unique<pbc::CallbackThread>("relay");
       options.callback_queue = thread_->queue();
     }
     sub_ = nh.subscribe(options);
@@ -438,7 +438,9 @@ private:
 
   Options options_;
   std::unique_ptr<SampleSource> source_;
-  pbc::CallbackThread receiver_;  ///< serves sub_: the answers cost one thread wake-up, as a consumer's may
+  pbc::CallbackThread receiver_{
+    "bench_receiver"
+  };  ///< serves sub_: the answers cost one thread wake-up, as a consumer's may
   ros::Publisher pub_;
   ros::Subscriber sub_;
   std::thread thread_;

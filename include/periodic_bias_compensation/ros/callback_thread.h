@@ -14,8 +14,8 @@ namespace periodic_bias_compensation
 class CallbackThread
 {
 public:
-  /// Starts the thread.
-  CallbackThread();
+  /// Starts the thread, named `name` (as top and perf show it; at most 15 characters kept).
+  explicit CallbackThread(const char* name);
   /// Stops the thread after the callback it is running, if any; callbacks still queued are
   /// dropped. Shut the subscriptions made on queue() down first.
   ~CallbackThread();

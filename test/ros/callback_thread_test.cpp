@@ -1,0 +1,112 @@
+// CallbackThread without a master: callbacks added to its queue run on its own, named thread, in
+// order, and its destructor waits for the callback it is running.
+#include <pthread.h>
+
+#include <atomic>
+#include <chrono>
+#include <condition_variable>
+#include <functional>
+#include <future>
+#include <mutex>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <ros/callback_queue.h>
+
+#include "periodic_bias_compensation/ros/callback_thread.h"
+
+namespace
+{
+using periodic_bias_compensation::CallbackThread;
+
+/// Adds `work` to the queue as one callback.
+void add(CallbackThread& thread, std::function<void()> work)
+{
+  class Call : public ros::CallbackInterface
+  {
+  public:
+    explicit Call(std::function<void()> work) : work_(std::move(work))
+    {
+    }
+    CallResult call() override
+    {
+      work_();
+      return Success;
+    }
+
+  private:
+    std::function<void()> work_;
+  };
+  thread.queue()->addCallback(boost::make_shared<Call>(std::move(work)));
+}
+
+std::string threadName()
+{
+  char name[16] = {};
+  pthread_getname_np(pthread_self(), name, sizeof(name));
+  return name;
+}
+}  // namespace
+
+TEST(CallbackThread, RunsCallbacksInOrderOnItsOwnNamedThread)
+{
+  CallbackThread thread("pbc_test");
+  std::mutex mutex;
+  std::condition_variable done;
+  std::vector<int> order;
+  std::vector<std::thread::id> ids;
+  std::vector<std::string> names;
+  for (int i = 0; i < 5; ++i)
+  {
+    add(thread, [&, i] {
+      std::lock_guard<std::mutex> lock(mutex);
+      order.push_back(i);
+      ids.push_back(std::this_thread::get_id());
+      names.push_back(threadName());
+      done.notify_one();
+    });
+  }
+  std::unique_lock<std::mutex> lock(mutex);
+  ASSERT_TRUE(done.wait_for(lock, std::chrono::seconds(10), [&] { return order.size() == 5; }));
+  EXPECT_EQ(order, (std::vector<int>{ 0, 1, 2, 3, 4 }));
+  for (std::size_t i = 0; i < ids.size(); ++i)
+  {
+    EXPECT_NE(ids[i], std::this_thread::get_id());
+    EXPECT_EQ(ids[i], ids[0]);
+    EXPECT_EQ(names[i], "pbc_test");
+  }
+}
+
+TEST(CallbackThread, LongNamesAreCutToWhatTheKernelKeeps)
+{
+  CallbackThread thread("a_name_longer_than_fifteen");
+  std::promise<std::string> name;
+  add(thread, [&] { name.set_value(threadName()); });
+  auto future = name.get_future();
+  ASSERT_EQ(future.wait_for(std::chrono::seconds(10)), std::future_status::ready);
+  EXPECT_EQ(future.get(), "a_name_longer_t");
+}
+
+TEST(CallbackThread, DestructionWaitsForTheRunningCallback)
+{
+  std::atomic<bool> started{ false }, finished{ false };
+  {
+    CallbackThread thread("pbc_test");
+    add(thread, [&] {
+      started = true;
+      std::this_thread::sleep_for(std::chrono::milliseconds(200));
+      finished = true;
+    });
+    while (!started)
+      std::this_thread::yield();
+  }
+  EXPECT_TRUE(finished);
+}
+
+int main(int argc, char** argv)
+{
+  testing::InitGoogleTest(&argc, argv);
+  return RUN_ALL_TESTS();
+}
