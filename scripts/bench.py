@@ -239,7 +239,8 @@ class Bench:
     def nodelet_side_by_side(self):
         """The compensator (imu/data on its own thread, then on the manager's queues), the harness's
         own relay and imu_tools' Madgwick nodelet in the same harness, in-process, paced at 100 Hz,
-        1 kHz and 2.8 kHz: latency and the process's CPU time per message."""
+        1 kHz and 2.8 kHz: latency and CPU time per message (the process's, and without the
+        harness's threads)."""
         madgwick = self.madgwick_env()
         log('nodelet side by side: 100 Hz, 1 kHz, 2.8 kHz, with the relay' + (' and Madgwick' if madgwick else ''))
         runs = []

@@ -97,15 +97,18 @@ def nodelet_markdown(runs):
               'threads and queues alone, the floor of any nodelet measured here) and imu_tools\' Madgwick '
               'filter nodelet (imu_filter_madgwick/ImuFilterNodelet on the manager\'s queues, accelerometer '
               'and gyro, its imu/data the answer). The harness receives every answer on a thread of its '
-              'own. CPU time per message: the whole process (publisher, callback queues and the nodelet) '
-              'over the messages sent.' + _side_length(side))
+              'own. CPU time per message, over the messages sent: `process`, every thread of the process; '
+              '`nodelet`, the same without the harness\'s two threads (its publisher and its receiver): the '
+              'nodelet measured, the manager\'s threads and roscpp\'s.' + _side_length(side))
         print()
-        print('| nodelet | input | sent | dropped | latency p50 [us] | p99 [us] | max [us] | CPU per message [us] |')
-        print('|---|---|---|---|---|---|---|---|')
+        print('| nodelet | input | sent | dropped | latency p50 [us] | p99 [us] | max [us] '
+              '| CPU per message, process [us] | nodelet [us] |')
+        print('|---|---|---|---|---|---|---|---|---|')
         for label, f in side:
-            print('| %s | %s | %s | %s | %.0f | %.0f | %.0f | %.1f |' % (
+            print('| %s | %s | %s | %s | %.0f | %.0f | %.0f | %.1f | %.1f |' % (
                 _side_name(f), label, f['sent'], f['dropped'], float(f['p50_us']),
-                float(f['p99_us']), float(f['max_us']), float(f.get('cpu_us_per_msg', 'nan'))))
+                float(f['p99_us']), float(f['max_us']), float(f.get('cpu_us_per_msg', 'nan')),
+                float(f.get('nodelet_cpu_us_per_msg', 'nan'))))
         if not any(f.get('nodelet') == 'madgwick' for _, f in side):
             print()
             print('Madgwick not measured in this run (no built imu_tools given: `--imu-tools DEVEL`).')

@@ -4,15 +4,18 @@
 // not a test.
 //
 //   core_latency --scenario FILE.yaml --duration S [--rate HZ] [--speed X]
-//                [--designs background|calling]
+//                [--designs background|calling] [--calls-csv FILE]
 //
 // The scenario (its own seed, at its own rate or HZ) is simulated for S seconds first; then sample k is given at
 // start + (t_k - t_0) / X of the steady clock (X = 1: the IMU's own pace) and its call timed.
 // Output: one line of key=value pairs on stdout (call times in us; max_at_s is the data time of
-// the slowest call from the first sample, `slowest` the five slowest as data time:us).
+// the slowest call from the first sample, `slowest` the five slowest as data time:us). --calls-csv
+// writes every call as data time from the first sample [s] and call time [us], to find what
+// recurs in the slow ones.
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <fstream>
 #include <iostream>
 #include <optional>
 #include <string>
@@ -37,11 +40,12 @@ struct Options
   double rate = 0.0;  ///< 0: the scenario's
   double speed = 1.0;
   std::string designs = "background";
+  std::string calls_csv;
 };
 
 const char* kUsage =
     "usage: core_latency --scenario FILE.yaml --duration S [--rate HZ] [--speed X]\n"
-    "                    [--designs background|calling]\n";
+    "                    [--designs background|calling] [--calls-csv FILE]\n";
 
 std::optional<Options> parseOptions(int argc, char** argv)
 {
@@ -51,7 +55,8 @@ std::optional<Options> parseOptions(int argc, char** argv)
       .number("--duration", &o.duration)
       .number("--rate", &o.rate)
       .number("--speed", &o.speed)
-      .text("--designs", &o.designs);
+      .text("--designs", &o.designs)
+      .text("--calls-csv", &o.calls_csv);
   if (!cli.parse(argc, argv))
     return std::nullopt;
   if (o.scenario.empty() || !(o.duration > 0.0) || !(o.speed > 0.0))
@@ -109,6 +114,16 @@ int main(int argc, char** argv)
       compensator.addSample(samples[k], &out);
       call_us[k] = std::chrono::duration<double, std::micro>(Clock::now() - before).count();
       checksum += out.position_filtered.sum() + out.position_wave.sum();
+    }
+    if (!options.calls_csv.empty())
+    {
+      std::ofstream csv(options.calls_csv);
+      csv.precision(9);
+      csv << "t_s,call_us\n";
+      for (std::size_t k = 0; k < samples.size(); ++k)
+        csv << samples[k].t - t0 << ',' << call_us[k] << '\n';
+      if (!csv)
+        throw std::runtime_error("cannot write " + options.calls_csv);
     }
     // The calls by time, slowest first: the quantiles, and the five slowest as data time:us.
     std::vector<std::size_t> order(call_us.size());

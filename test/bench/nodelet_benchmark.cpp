@@ -4,6 +4,7 @@
 //
 //   nodelet_benchmark --transport intra|tcp --scenario FILE.yaml --rate HZ --duration S
 //                     [--closed-loop] [--stream] [--rss-csv FILE] [--rss-every N]
+//                     [--latency-csv FILE]
 //                     [--nodelet compensator|madgwick|relay] [--manager-queues]
 //
 // This program is the nodelet manager: a nodelet::Loader holding BenchSource (below) and, for
@@ -15,6 +16,8 @@
 // them, at most kInFlight unanswered (its queue holds 1000), for S seconds of data. Samples are
 // simulated once (up to kCachedSamples, then replayed with new stamps) unless --stream
 // simulates each one (long runs; with --rss-csv the process RSS is written every N outputs).
+// --latency-csv writes each answered input's k and latency [us] (the first kRing inputs), to
+// find what recurs in the slow ones.
 // --nodelet madgwick measures imu_tools' Madgwick filter nodelet (imu_filter_madgwick/
 // ImuFilterNodelet, built outside this repository, found through ROS_PACKAGE_PATH) in the same
 // harness, intra-process only: BenchSource then publishes imu/data_raw and times its imu/data.
@@ -35,6 +38,8 @@
 #include <cstdint>
 #include <ctime>
 #include <fstream>
+#include <functional>
+#include <future>
 #include <iostream>
 #include <memory>
 #include <mutex>
@@ -42,11 +47,13 @@
 #include <stdexcept>
 #include <string>
 #include <thread>
+#include <utility>
 #include <vector>
 
 #include <nav_msgs/Odometry.h>
 #include <nodelet/loader.h>
 #include <nodelet/nodelet.h>
+#include <pthread.h>
 #include <ros/ros.h>
 #include <sensor_msgs/Imu.h>
 #include <unistd.h>
@@ -79,6 +86,7 @@ struct Options
   bool stream = false;
   std::string rss_csv;
   std::int64_t rss_every = 6000;
+  std::string latency_csv;
   std::string nodelet = "compensator";  ///< the nodelet measured: compensator, madgwick or relay
   bool manager_queues = false;          ///< the measured nodelet's imu/data on the manager's queues
 };
@@ -177,13 +185,31 @@ private:
   std::uint64_t count_ = 0;
 };
 
-/// CPU time of the whole process, every thread (publisher, callback queues, the nodelet) [s].
-double processCpuSeconds()
+/// CPU time on `clock` [s]: CLOCK_PROCESS_CPUTIME_ID (every thread), CLOCK_THREAD_CPUTIME_ID (the
+/// caller's thread) or a thread's clock (pthread_getcpuclockid).
+double cpuSeconds(clockid_t clock)
 {
   timespec t{};
-  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+  clock_gettime(clock, &t);
   return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
 }
+
+/// Runs `f` once on the thread that serves the queue it is added to.
+class OnceCallback : public ros::CallbackInterface
+{
+public:
+  explicit OnceCallback(std::function<void()> f) : f_(std::move(f))
+  {
+  }
+  CallResult call() override
+  {
+    f_();
+    return Success;
+  }
+
+private:
+  std::function<void()> f_;
+};
 
 long rssKilobytes()
 {
@@ -299,9 +325,11 @@ public:
       std::this_thread::sleep_for(std::chrono::milliseconds(20));
     }
     // Everything sent was answered (or given up): the process's CPU time per input since the
-    // first, publisher included (it replays cached messages: a small share).
-    const double cpu_per_message =
-        (processCpuSeconds() - cpu_start_) / static_cast<double>(std::max<std::int64_t>(sent_, 1));
+    // first, and the same without the harness's two threads (the publisher, which replays cached
+    // messages, and the receiver): the nodelet measured, its manager and roscpp's threads.
+    const double messages = static_cast<double>(std::max<std::int64_t>(sent_, 1));
+    const double process_cpu = cpuSeconds(CLOCK_PROCESS_CPUTIME_ID) - cpu_start_;
+    const double harness_cpu = publisher_cpu_ + cpuSeconds(receiver_clock_) - receiver_cpu_start_;
     sub_.shutdown();  // before the manager's callback queues go
     pub_.shutdown();
     std::lock_guard<std::mutex> lock(mutex_);
@@ -312,8 +340,9 @@ public:
               << " input_rate=" << static_cast<double>(sent_) / wall << " p50_us=" << latency_.quantile(0.5) * 1e6
               << " p99_us=" << latency_.quantile(0.99) * 1e6 << " p999_us=" << latency_.quantile(0.999) * 1e6
               << " max_us=" << max_latency_ * 1e6 << " max_at_s=" << max_at_
-              << " cpu_us_per_msg=" << cpu_per_message * 1e6 << " rss_kb=" << rssKilobytes()
-              << " nodelet=" << options_.nodelet
+              << " cpu_us_per_msg=" << process_cpu / messages * 1e6
+              << " nodelet_cpu_us_per_msg=" << (process_cpu - harness_cpu) / messages * 1e6
+              << " rss_kb=" << rssKilobytes() << " nodelet=" << options_.nodelet
               << " queues=" << (options_.manager_queues || options_.nodelet == "madgwick" ? "manager" : "own")
               << std::endl;
     if (!options_.rss_csv.empty())
@@ -324,6 +353,13 @@ public:
       {
         csv << r.data_hours << ',' << r.outputs << ',' << r.rss_kb << ',' << r.wall_s << '\n';
       }
+    }
+    if (!options_.latency_csv.empty())
+    {
+      std::ofstream csv(options_.latency_csv);
+      csv << "k,latency_us\n";
+      for (const auto& [k, latency] : latencies_)
+        csv << k << ',' << latency * 1e6 << '\n';
     }
   }
 
@@ -352,6 +388,13 @@ private:
     subscription.transport_hints = ros::TransportHints().tcpNoDelay();
     subscription.callback_queue = receiver_.queue();
     sub_ = nh.subscribe(subscription);
+    std::promise<clockid_t> receiver_clock;
+    receiver_.queue()->addCallback(boost::make_shared<OnceCallback>([&receiver_clock] {
+      clockid_t clock{};
+      pthread_getcpuclockid(pthread_self(), &clock);
+      receiver_clock.set_value(clock);
+    }));
+    receiver_clock_ = receiver_clock.get_future().get();
     thread_ = std::thread([this] { run(); });
   }
 
@@ -369,7 +412,9 @@ private:
     std::this_thread::sleep_for(std::chrono::milliseconds(500));  // connections settle
     const auto count = static_cast<std::int64_t>(std::llround(options_.duration * options_.rate));
     start_ = Clock::now();
-    cpu_start_ = processCpuSeconds();
+    cpu_start_ = cpuSeconds(CLOCK_PROCESS_CPUTIME_ID);
+    receiver_cpu_start_ = cpuSeconds(receiver_clock_);
+    const double publisher_cpu_start = cpuSeconds(CLOCK_THREAD_CPUTIME_ID);
     std::int64_t lost = 0;  // closed loop: inputs given up after a second without an answer
     for (std::int64_t k = 0; k < count && !stop_; ++k)
     {
@@ -401,6 +446,7 @@ private:
     }
     std::lock_guard<std::mutex> lock(mutex_);
     end_ = Clock::now();
+    publisher_cpu_ = cpuSeconds(CLOCK_THREAD_CPUTIME_ID) - publisher_cpu_start;
   }
 
   /// An output (its stamp is its input's).
@@ -416,6 +462,8 @@ private:
       const double latency =
           std::chrono::duration<double>(now - published_[static_cast<std::size_t>(k) % kRing]).count();
       latency_.add(latency);
+      if (!options_.latency_csv.empty() && k < static_cast<std::int64_t>(kRing))
+        latencies_.emplace_back(k, latency);
       if (latency > max_latency_)
       {
         max_latency_ = latency;
@@ -452,16 +500,21 @@ private:
   std::int64_t sent_ = 0;
   std::int64_t received_ = 0;
   Clock::time_point start_, end_;
-  double cpu_start_ = 0.0;  ///< processCpuSeconds() when the first input was sent
+  double cpu_start_ = 0.0;           ///< the process's CPU time when the first input was sent [s]
+  clockid_t receiver_clock_{};       ///< the CPU clock of receiver_'s thread
+  double receiver_cpu_start_ = 0.0;  ///< its CPU time when the first input was sent [s]
+  double publisher_cpu_ = 0.0;       ///< CPU time of the publishing thread, first input to last [s]
   Histogram latency_;
   double max_latency_ = 0.0;
   double max_at_ = 0.0;  ///< data time of the slowest output [s]
   std::vector<RssRow> rss_;
+  std::vector<std::pair<std::int64_t, double>> latencies_;  ///< k, latency [s] (--latency-csv)
 };
 
 const char* kUsage =
     "usage: nodelet_benchmark --transport intra|tcp --scenario FILE.yaml --rate HZ --duration S\n"
     "                         [--closed-loop] [--stream] [--rss-csv FILE] [--rss-every N]\n"
+    "                         [--latency-csv FILE]\n"
     "                         [--nodelet compensator|madgwick|relay] [--manager-queues]\n";
 
 /// The options, or nothing after --help.
@@ -477,6 +530,7 @@ std::optional<Options> parseOptions(int argc, char** argv)
       .flag("--stream", &o.stream)
       .text("--rss-csv", &o.rss_csv)
       .integer("--rss-every", &o.rss_every)
+      .text("--latency-csv", &o.latency_csv)
       .text("--nodelet", &o.nodelet)
       .flag("--manager-queues", &o.manager_queues);
   if (!cli.parse(argc, argv))

@@ -90,18 +90,19 @@ class RenderTest(unittest.TestCase):
     def test_nodelet_side_by_side(self):
         results = copy.deepcopy(FIXTURE)
         runs = results['sections']['nodelet']['runs']
-        base = dict(runs[0]['fields'], p50_us='111', p99_us='222', max_us='333', cpu_us_per_msg='4.56')
+        base = dict(runs[0]['fields'], p50_us='111', p99_us='222', max_us='333', cpu_us_per_msg='4.56',
+                    nodelet_cpu_us_per_msg='1.23')
         runs += [{'label': '2.8 kHz', 'group': 'side-by-side', 'fields': dict(base, nodelet='compensator')},
                  {'label': '2.8 kHz', 'group': 'side-by-side',
                   'fields': dict(base, nodelet='compensator', queues='manager', p50_us='99')},
                  {'label': '2.8 kHz', 'group': 'side-by-side', 'fields': dict(base, nodelet='relay', p50_us='55')},
                  {'label': '2.8 kHz', 'group': 'side-by-side', 'fields': dict(base, nodelet='madgwick', dropped='7')}]
         md = render(results)
-        self.assertIn('| compensator | 2.8 kHz | %s | %s | 111 | 222 | 333 | 4.6 |' % (base['sent'], base['dropped']), md)
-        self.assertIn("| compensator, manager's queues | 2.8 kHz | %s | %s | 99 | 222 | 333 | 4.6 |"
+        self.assertIn('| compensator | 2.8 kHz | %s | %s | 111 | 222 | 333 | 4.6 | 1.2 |' % (base['sent'], base['dropped']), md)
+        self.assertIn("| compensator, manager's queues | 2.8 kHz | %s | %s | 99 | 222 | 333 | 4.6 | 1.2 |"
                       % (base['sent'], base['dropped']), md)
-        self.assertIn('| madgwick | 2.8 kHz | %s | 7 | 111 | 222 | 333 | 4.6 |' % base['sent'], md)
-        self.assertIn('| relay | 2.8 kHz | %s | %s | 55 | 222 | 333 | 4.6 |' % (base['sent'], base['dropped']), md)
+        self.assertIn('| madgwick | 2.8 kHz | %s | 7 | 111 | 222 | 333 | 4.6 | 1.2 |' % base['sent'], md)
+        self.assertIn('| relay | 2.8 kHz | %s | %s | 55 | 222 | 333 | 4.6 | 1.2 |' % (base['sent'], base['dropped']), md)
         self.assertNotIn('Madgwick not measured', md)
         # Whether the fastest runs cover the start-up alone is said from their length.
         long_runs = dict(base, sent=str(int(40 * float(base['input_rate']))))
