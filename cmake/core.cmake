@@ -33,6 +33,7 @@ if(CATKIN_ENABLE_TESTING)
     test/core/test_periodic_wave.cpp
     test/core/test_numeric.cpp
     test/core/test_work_thread.cpp
+    test/core/test_background.cpp
     test/core/test_raw_integrator.cpp
     test/core/test_real_world_streams.cpp)
   target_link_libraries(test_core ${PROJECT_NAME}_core)

@@ -1,5 +1,7 @@
 #include "background.h"
 
+#include <pthread.h>
+#include <sched.h>
 #include <sys/resource.h>
 #include <sys/syscall.h>
 #include <unistd.h>
@@ -13,13 +15,18 @@ namespace periodic_bias_compensation
 {
 namespace
 {
-/// A thread with a queue of tasks, run one at a time in the order posted; at `nice` (0: the
-/// priority of the thread that started it).
+/// A thread named `name` with a queue of tasks, run one at a time in the order posted; at `nice`
+/// (0: the priority of the thread that started it), scheduled as a batch thread (SCHED_BATCH): it
+/// keeps its share of the processor, but waking it never preempts the thread that posted the
+/// task. As an ordinary thread it would: woken after sleeping, the scheduler favours it, and the
+/// sample's call that posted a task lost its core for milliseconds (docs/benchmarks.md, "Nodelet
+/// latency, where the time goes").
 class BackgroundThread
 {
 public:
-  explicit BackgroundThread(int nice) : nice_(nice), thread_([this] { run(); })
+  BackgroundThread(const char* name, int nice) : nice_(nice), thread_([this] { run(); })
   {
+    pthread_setname_np(thread_.native_handle(), name);
   }
   ~BackgroundThread()
   {
@@ -56,6 +63,9 @@ public:
 private:
   void run()
   {
+    // Both are allowed to any thread; where refused, the thread runs as an ordinary one.
+    const sched_param batch{};
+    pthread_setschedparam(pthread_self(), SCHED_BATCH, &batch);
     if (nice_ != 0)
       setpriority(PRIO_PROCESS, static_cast<id_t>(syscall(SYS_gettid)), nice_);
     for (;;)
@@ -83,14 +93,14 @@ private:
 
 BackgroundThread& designer()
 {
-  static BackgroundThread thread(0);
+  static BackgroundThread thread("pbc_design", 0);
   return thread;
 }
 }  // namespace
 
 void planInBackground(std::function<void()> task)
 {
-  static BackgroundThread planner(19);
+  static BackgroundThread planner("pbc_plan", 19);
   planner.post(std::move(task));
 }
 

@@ -10,7 +10,8 @@
 namespace periodic_bias_compensation
 {
 /// Runs `task` on the core's planning thread (one per process, at nice 19, so that it leaves the
-/// core to the threads that feed samples), in the order given.
+/// core to the threads that feed samples), in the order given. The core's threads are batch
+/// threads (SCHED_BATCH): posting a task never hands the caller's core to them.
 void planInBackground(std::function<void()> task);
 
 /// Runs `task` on the core's design thread (one per process, at the caller's priority: a caller
