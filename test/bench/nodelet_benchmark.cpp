@@ -38,7 +38,6 @@
 #include <cstdint>
 #include <ctime>
 #include <fstream>
-#include <functional>
 #include <future>
 #include <iostream>
 #include <memory>
@@ -193,23 +192,6 @@ double cpuSeconds(clockid_t clock)
   clock_gettime(clock, &t);
   return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
 }
-
-/// Runs `f` once on the thread that serves the queue it is added to.
-class OnceCallback : public ros::CallbackInterface
-{
-public:
-  explicit OnceCallback(std::function<void()> f) : f_(std::move(f))
-  {
-  }
-  CallResult call() override
-  {
-    f_();
-    return Success;
-  }
-
-private:
-  std::function<void()> f_;
-};
 
 long rssKilobytes()
 {
@@ -389,11 +371,11 @@ private:
     subscription.callback_queue = receiver_.queue();
     sub_ = nh.subscribe(subscription);
     std::promise<clockid_t> receiver_clock;
-    receiver_.queue()->addCallback(boost::make_shared<OnceCallback>([&receiver_clock] {
+    receiver_.post([&receiver_clock] {
       clockid_t clock{};
       pthread_getcpuclockid(pthread_self(), &clock);
       receiver_clock.set_value(clock);
-    }));
+    });
     receiver_clock_ = receiver_clock.get_future().get();
     thread_ = std::thread([this] { run(); });
   }

@@ -1,11 +1,10 @@
-// CallbackThread without a master: callbacks added to its queue run on its own, named thread, in
+// CallbackThread without a master: work posted to it runs on its own, named thread, in
 // order, and its destructor waits for the callback it is running.
 #include <pthread.h>
 
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
-#include <functional>
 #include <future>
 #include <mutex>
 #include <string>
@@ -13,34 +12,12 @@
 #include <vector>
 
 #include <gtest/gtest.h>
-#include <ros/callback_queue.h>
 
 #include "periodic_bias_compensation/ros/callback_thread.h"
 
 namespace
 {
 using periodic_bias_compensation::CallbackThread;
-
-/// Adds `work` to the queue as one callback.
-void add(CallbackThread& thread, std::function<void()> work)
-{
-  class Call : public ros::CallbackInterface
-  {
-  public:
-    explicit Call(std::function<void()> work) : work_(std::move(work))
-    {
-    }
-    CallResult call() override
-    {
-      work_();
-      return Success;
-    }
-
-  private:
-    std::function<void()> work_;
-  };
-  thread.queue()->addCallback(boost::make_shared<Call>(std::move(work)));
-}
 
 std::string threadName()
 {
@@ -60,7 +37,7 @@ TEST(CallbackThread, RunsCallbacksInOrderOnItsOwnNamedThread)
   std::vector<std::string> names;
   for (int i = 0; i < 5; ++i)
   {
-    add(thread, [&, i] {
+    thread.post([&, i] {
       std::lock_guard<std::mutex> lock(mutex);
       order.push_back(i);
       ids.push_back(std::this_thread::get_id());
@@ -83,7 +60,7 @@ TEST(CallbackThread, LongNamesAreCutToWhatTheKernelKeeps)
 {
   CallbackThread thread("a_name_longer_than_fifteen");
   std::promise<std::string> name;
-  add(thread, [&] { name.set_value(threadName()); });
+  thread.post([&] { name.set_value(threadName()); });
   auto future = name.get_future();
   ASSERT_EQ(future.wait_for(std::chrono::seconds(10)), std::future_status::ready);
   EXPECT_EQ(future.get(), "a_name_longer_t");
@@ -94,7 +71,7 @@ TEST(CallbackThread, DestructionWaitsForTheRunningCallback)
   std::atomic<bool> started{ false }, finished{ false };
   {
     CallbackThread thread("pbc_test");
-    add(thread, [&] {
+    thread.post([&] {
       started = true;
       std::this_thread::sleep_for(std::chrono::milliseconds(200));
       finished = true;

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <atomic>
+#include <functional>
 #include <thread>
 
 #include <ros/callback_queue.h>
@@ -21,6 +22,9 @@ public:
   ~CallbackThread();
   CallbackThread(const CallbackThread&) = delete;
   CallbackThread& operator=(const CallbackThread&) = delete;
+
+  /// Runs `work` on the thread, after the callbacks already queued.
+  void post(std::function<void()> work);
 
   /// The queue to give a subscription (ros::SubscribeOptions::callback_queue).
   ros::CallbackQueue* queue()
