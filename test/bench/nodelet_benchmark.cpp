@@ -342,6 +342,8 @@ public:
       csv << "k,latency_us\n";
       for (const auto& [k, latency] : latencies_)
         csv << k << ',' << latency * 1e6 << '\n';
+      if (!csv)
+        std::cerr << "nodelet_benchmark: cannot write " << options_.latency_csv << std::endl;
     }
   }
 
