@@ -6,7 +6,9 @@
 #include <sched.h>
 #include <sys/resource.h>
 
+#include <functional>
 #include <future>
+#include <memory>
 #include <string>
 
 #include "../../src/core/background.h"
@@ -24,8 +26,7 @@ struct ThreadState
 };
 
 /// What the thread that runs a task posted with `post` is, seen from the task.
-template <typename Post>
-ThreadState stateOfThreadOf(Post post)
+ThreadState stateOfThreadOf(void (*post)(std::function<void()>))
 {
   auto state = std::make_shared<std::promise<ThreadState>>();
   const pthread_t caller = pthread_self();
@@ -45,7 +46,7 @@ ThreadState stateOfThreadOf(Post post)
 
 TEST(Background, ThePlanningThreadIsANamedBatchThreadAtNice19)
 {
-  const ThreadState s = stateOfThreadOf([](std::function<void()> task) { planInBackground(std::move(task)); });
+  const ThreadState s = stateOfThreadOf(planInBackground);
   EXPECT_TRUE(s.other_thread);
   EXPECT_EQ(s.name, "pbc_plan");
   EXPECT_EQ(s.policy, SCHED_BATCH);
@@ -55,7 +56,7 @@ TEST(Background, ThePlanningThreadIsANamedBatchThreadAtNice19)
 TEST(Background, TheDesignThreadIsANamedBatchThreadAtTheCallersPriority)
 {
   const int callers_nice = getpriority(PRIO_PROCESS, 0);
-  const ThreadState s = stateOfThreadOf([](std::function<void()> task) { designInBackground(std::move(task)); });
+  const ThreadState s = stateOfThreadOf(designInBackground);
   EXPECT_TRUE(s.other_thread);
   EXPECT_EQ(s.name, "pbc_design");
   EXPECT_EQ(s.policy, SCHED_BATCH);
