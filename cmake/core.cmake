@@ -5,6 +5,8 @@ target_include_directories(${PROJECT_NAME}_core PUBLIC include)
 # FrequencyTracker plans its transform on a thread of its own.
 find_package(Threads REQUIRED)
 target_link_libraries(${PROJECT_NAME}_core PUBLIC Eigen3::Eigen PkgConfig::FFTW3 yaml-cpp Threads::Threads)
+# The headers most of its files include, parsed once for the library instead of once per file.
+target_precompile_headers(${PROJECT_NAME}_core PRIVATE <algorithm> <array> <cmath> <vector> <Eigen/Dense>)
 
 if(CATKIN_ENABLE_TESTING)
   catkin_add_gtest(test_core
@@ -37,6 +39,9 @@ if(CATKIN_ENABLE_TESTING)
     test/core/test_raw_integrator.cpp
     test/core/test_real_world_streams.cpp)
   target_link_libraries(test_core ${PROJECT_NAME}_core)
+  # Every test file includes GoogleTest, most the compensator: parsed once for the executable.
+  target_precompile_headers(test_core PRIVATE <gtest/gtest.h> <cmath> <random> <vector> <Eigen/Dense>
+                            "${CMAKE_CURRENT_SOURCE_DIR}/include/periodic_bias_compensation/core/compensator.h")
   # test_real_world_streams reads ../shared/data beside the repository when it is there.
   target_compile_definitions(test_core PRIVATE PBC_SOURCE_DIR="${CMAKE_CURRENT_SOURCE_DIR}")
 endif()

@@ -12,6 +12,7 @@ add_library(${PROJECT_NAME}_gap
 target_include_directories(${PROJECT_NAME}_gap PUBLIC include)
 target_link_libraries(${PROJECT_NAME}_gap PUBLIC ${PROJECT_NAME}_sim ${PROJECT_NAME}_core Eigen3::Eigen PkgConfig::FFTW3
   nlohmann_json::nlohmann_json)
+target_precompile_headers(${PROJECT_NAME}_gap PRIVATE <algorithm> <cmath> <string> <vector> <Eigen/Dense>)
 
 # validate_gap: the diagnosis on simulated recordings whose effect is withheld (no ROS).
 add_executable(validate_gap src/tools/validate_gap.cpp)

@@ -33,6 +33,8 @@ if(CATKIN_ENABLE_TESTING)
     test/sim/test_random.cpp
     test/sim/test_shipped_scenarios.cpp)
   target_link_libraries(test_sim ${PROJECT_NAME}_sim)
+  target_precompile_headers(test_sim PRIVATE <gtest/gtest.h> <cmath> <string> <vector>
+                            "${CMAKE_CURRENT_SOURCE_DIR}/include/periodic_bias_compensation/sim/simulator.h")
   target_compile_definitions(test_sim PRIVATE
     PBC_SCENARIO_DIR="${CMAKE_CURRENT_SOURCE_DIR}/config/scenarios")
 endif()
