@@ -169,7 +169,7 @@ TEST(BagReader, GivesWhatRosbagViewGives)
   {
     // Many small chunks and one large one; times rising, or every 7th 20 ms back (across the
     // small chunks' boundaries too, which then overlap in time). Under the sanitizers a fifth of
-    // the messages (still about 90 small chunks): rosbag::View decompresses a chunk for every
+    // the messages (still many small chunks): rosbag::View decompresses a chunk for every
     // message it reads, and each decompression's large buffer is a fresh mapping under ASan.
     for (const std::uint32_t threshold : { 1024u, 4096u * 1024u })
     {
