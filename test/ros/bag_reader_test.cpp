@@ -163,7 +163,7 @@ void expectAsView(const std::string& path, const std::vector<std::string>& topic
 
 TEST(BagReader, GivesWhatRosbagViewGives)
 {
-  const int kMessages = periodic_bias_compensation::test::kSanitized ? 600 : 3000;
+  constexpr int kMessages = periodic_bias_compensation::test::kSanitized ? 600 : 3000;
   for (const auto compression :
        { rosbag::compression::Uncompressed, rosbag::compression::LZ4, rosbag::compression::BZ2 })
   {
