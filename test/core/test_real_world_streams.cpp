@@ -197,7 +197,7 @@ Stream benchWithDrift(unsigned seed)
 TEST(RealWorldStreams, SensorAtRestInventsNoMotion)
 {
   // 600 s at rest: no wave output and no slow motion beyond 2 cm, from the first output on.
-  for (unsigned seed = 1; seed <= 4; ++seed)
+  for (unsigned seed = 1; seed <= pbc::test::seedsToRun(4); ++seed)
   {
     const Outcome r = run(atRest(seed));
     RecordProperty("max_wave_" + std::to_string(seed), std::to_string(r.max_wave));
