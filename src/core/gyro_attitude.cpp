@@ -25,6 +25,27 @@ constexpr double kStaticRateSpread = 0.02;
 constexpr double kStaticForceSpread = 0.1;
 }  // namespace
 
+Eigen::Quaterniond levelFromSpecificForce(const Eigen::Vector3d& specific_force)
+{
+  // The rotation about u x z by acos(u . z) as (1 + u . z, u x z), normalised: a half-angle
+  // quaternion, of unit norm to rounding even close to the opposite direction. Not Eigen's
+  // FromTwoVectors, whose opposite-vector case instantiates a singular value decomposition that
+  // takes longer to compile than the rest of the file.
+  const Eigen::Vector3d u = specific_force.normalized();
+  const double c = u.z();
+  Eigen::Vector3d axis(u.y(), -u.x(), 0.0);
+  if (c < -1.0 + 1e-12)
+  {
+    // Nearly opposite: half a turn about a horizontal axis normal to u.
+    const double norm = axis.norm();
+    axis = norm > 0.0 ? Eigen::Vector3d(axis / norm) : Eigen::Vector3d::UnitX();
+    const double w2 = 0.5 * (1.0 + std::max(c, -1.0));
+    const Eigen::Vector3d vec = axis * std::sqrt(1.0 - w2);
+    return Eigen::Quaterniond(std::sqrt(w2), vec.x(), vec.y(), vec.z());
+  }
+  return Eigen::Quaterniond(1.0 + c, axis.x(), axis.y(), 0.0).normalized();
+}
+
 GyroAttitude::GyroAttitude(const GyroAttitudeConfig& config) : config_(config)
 {
 }
@@ -168,7 +189,7 @@ void GyroAttitude::start(const Eigen::Vector3d& angular_rate, const Eigen::Vecto
   // force is up and its mean rate the gyro bias (a consumer gyro's few degrees per second would
   // otherwise tilt the estimate by radians before the bias loop caught up); in motion, the newest
   // sample's force, and the bias is left to the loop.
-  attitude_ = Eigen::Quaterniond::FromTwoVectors(at_rest ? w.force_mean : specific_force, Eigen::Vector3d::UnitZ());
+  attitude_ = levelFromSpecificForce(at_rest ? w.force_mean : specific_force);
   if (at_rest && config_.estimate_bias)
     bias_ = w.rate_mean;
   started_at_rest_ = at_rest;

@@ -5,12 +5,6 @@
 
 namespace periodic_bias_compensation
 {
-Quaternion levelFromSpecificForce(const Vector3& mean_specific_force)
-{
-  // At rest the specific force points up: rotate it onto +z (yaw is unobservable: kept 0).
-  return Quaternion::FromTwoVectors(mean_specific_force.normalized(), Vector3::UnitZ());
-}
-
 // Whether the last sample had orientation, and the last level frame, are kept: the next sample
 // is judged by the last one until it has been levelled itself.
 void Leveller::reset()

@@ -97,6 +97,37 @@ double runTiltError(const RollingHull& hull, const pbc::GyroAttitudeConfig& conf
 }
 }  // namespace
 
+TEST(GyroAttitude, LevelFromSpecificForceIsTheShortestRotationOntoUp)
+{
+  std::mt19937 rng(7);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  std::vector<Vector3> forces;
+  for (int i = 0; i < 1000; ++i)
+    forces.push_back(pbc::test::drawVector([&] { return normal(rng); }));
+  // Along the axes, and just short of straight down (the last ordinary case).
+  forces.insert(forces.end(), { Vector3::UnitZ(), Vector3::UnitX(), -Vector3::UnitY(), Vector3(1e-5, -2e-5, -1.0) });
+  for (const Vector3& force : forces)
+  {
+    SCOPED_TRACE(::testing::Message() << force.transpose());
+    const Quaternion q = pbc::levelFromSpecificForce(9.8 * force);
+    const Vector3 up = force.normalized();
+    EXPECT_NEAR(q.norm(), 1.0, 1e-12);
+    EXPECT_LT((q * up - Vector3::UnitZ()).norm(), 1e-9);
+    EXPECT_EQ(q.z(), 0.0);  // a horizontal axis: no yaw
+    EXPECT_NEAR(2.0 * std::acos(std::clamp(q.w(), -1.0, 1.0)), std::acos(up.z()), 1e-6);
+  }
+  // Straight down, and down within rounding: half a turn about x, or about the horizontal axis
+  // normal to the force.
+  const Quaternion down = pbc::levelFromSpecificForce(-Vector3::UnitZ());
+  EXPECT_EQ(down.coeffs(), Quaternion(0.0, 1.0, 0.0, 0.0).coeffs());
+  const Quaternion nearly_down = pbc::levelFromSpecificForce(Vector3(1e-13, 2e-13, -1.0));
+  EXPECT_LT((nearly_down.coeffs() - Quaternion(0.0, 2.0 / std::sqrt(5.0), -1.0 / std::sqrt(5.0), 0.0).coeffs()).norm(),
+            1e-12);
+  EXPECT_LT((nearly_down * Vector3(1e-13, 2e-13, -1.0) - Vector3::UnitZ()).norm(), 1e-9);
+  EXPECT_EQ(pbc::levelFromSpecificForce(Vector3::Zero()).coeffs(), Quaternion::Identity().coeffs());
+  EXPECT_TRUE(pbc::levelFromSpecificForce(Vector3(NAN, 0.0, 9.8)).coeffs().hasNaN());
+}
+
 TEST(GyroAttitude, FollowsARollingHullThroughWaveAccelerations)
 {
   RollingHull hull;

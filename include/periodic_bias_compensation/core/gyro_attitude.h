@@ -25,6 +25,12 @@
 
 namespace periodic_bias_compensation
 {
+/// Roll and pitch that turn a specific force (at rest: up) onto +z by the shortest rotation; yaw
+/// zero. A force pointing straight down turns about x, nearly straight down about the horizontal
+/// axis normal to it (as Eigen::Quaterniond::FromTwoVectors). A zero force gives the identity,
+/// a non-finite one a NaN quaternion.
+Eigen::Quaterniond levelFromSpecificForce(const Eigen::Vector3d& specific_force);
+
 /// Data that starts the attitude [s]: at rest (gyro and force steady) its mean rate is the gyro
 /// bias and its mean force the up direction; otherwise the attitude starts from the newest force.
 constexpr double kStartWindow = 2.0;

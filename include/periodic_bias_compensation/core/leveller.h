@@ -14,9 +14,6 @@
 
 namespace periodic_bias_compensation
 {
-/// Roll and pitch that turn a mean specific force (at rest: up) onto +z; yaw zero.
-Quaternion levelFromSpecificForce(const Vector3& mean_specific_force);
-
 class Leveller
 {
 public:
