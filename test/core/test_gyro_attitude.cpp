@@ -104,7 +104,7 @@ TEST(GyroAttitude, LevelFromSpecificForceIsTheShortestRotationOntoUp)
   std::vector<Vector3> forces;
   for (int i = 0; i < 1000; ++i)
     forces.push_back(pbc::test::drawVector([&] { return normal(rng); }));
-  // Along the axes, and just short of straight down (the last ordinary case).
+  // Along the axes, and close to straight down yet outside the opposite-vector case.
   forces.insert(forces.end(), { Vector3::UnitZ(), Vector3::UnitX(), -Vector3::UnitY(), Vector3(1e-5, -2e-5, -1.0) });
   for (const Vector3& force : forces)
   {

@@ -85,7 +85,7 @@ TEST(WaveConsistency, AWaveThatIsMeasuredIsNeverScaled)
   // second late: scaled by no more than a tenth.
   for (double rate : { 10.0, 100.0, 256.0 })
   {
-    for (unsigned seed = 1; seed <= periodic_bias_compensation::test::seedsToRun(3); ++seed)
+    for (unsigned seed = 1; seed <= test::seedsToRun(3); ++seed)
     {
       std::mt19937_64 rng(seed);
       const std::vector<Component> wind = sea(60, 4.0, 12.0, 0.3, &rng);
