@@ -46,6 +46,8 @@ from bench_tables import parse_blocks  # noqa: E402
 JSON = os.path.join(REPO, 'docs', 'bench', 'results.json')
 OUT = os.path.join(REPO, 'docs', 'benchmarks.md')
 TEMPLATE = os.path.join(REPO, 'docs', 'bench', 'benchmarks.md.in')
+# The one CPU of the real-time side-by-side runs (any the machine has; two is the least).
+REALTIME_CPU = 1
 TARGETS = ('core_benchmark', 'core_latency', 'evaluate_compensator', 'nodelet_benchmark', 'bag_read_floor', 'simulate_imu',
            'compensate_bag', 'test_core')
 PY = '/usr/bin/python3'  # Debian's ROS modules live there, not in another python on PATH
@@ -238,7 +240,7 @@ class Bench:
 
     def nodelet_side_by_side(self):
         """The compensator (imu/data on its own thread, then on the manager's queues), the harness's
-        own relay and imu_tools' Madgwick nodelet in the same harness, in-process, paced at 100 Hz,
+        own relay (both also real-time, on one CPU) and imu_tools' Madgwick nodelet in the same harness, in-process, paced at 100 Hz,
         1 kHz and 2.8 kHz: latency and CPU time per message (the process's, and without the
         harness's threads)."""
         madgwick = self.madgwick_env()
@@ -252,6 +254,11 @@ class Bench:
                                          '--manager-queues', group='side-by-side'))
             runs.append(self.nodelet_run(label, 'intra', '--rate', rate, '--duration', seconds,
                                          '--nodelet', 'relay', group='side-by-side'))
+            # Real-time: the sample's threads at SCHED_FIFO 50, the process on one CPU.
+            for nodelet in ('compensator', 'relay'):
+                runs.append(self.nodelet_run(label, 'intra', '--rate', rate, '--duration', seconds,
+                                             '--nodelet', nodelet, '--realtime-priority', 50, '--cpu',
+                                             REALTIME_CPU, group='side-by-side'))
             if madgwick:
                 runs.append(self.nodelet_run(label, 'intra', '--rate', rate, '--duration', seconds,
                                              '--nodelet', 'madgwick', env=madgwick, group='side-by-side'))

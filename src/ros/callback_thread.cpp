@@ -1,8 +1,11 @@
 #include "periodic_bias_compensation/ros/callback_thread.h"
 
 #include <pthread.h>
+#include <sched.h>
 
+#include <cerrno>
 #include <cstring>
+#include <string>
 #include <utility>
 
 #include <boost/make_shared.hpp>
@@ -43,6 +46,28 @@ CallbackThread::CallbackThread(const char* name)
   char shortened[16] = {};
   std::strncpy(shortened, name, sizeof(shortened) - 1);
   pthread_setname_np(thread_.native_handle(), shortened);
+}
+
+bool CallbackThread::setRealtimePriority(int priority, std::string* why)
+{
+  const int lowest = sched_get_priority_min(SCHED_FIFO);
+  const int highest = sched_get_priority_max(SCHED_FIFO);
+  if (priority < lowest || priority > highest)
+  {
+    *why = "priority " + std::to_string(priority) + " is outside SCHED_FIFO's " + std::to_string(lowest) + "-" +
+           std::to_string(highest);
+    return false;
+  }
+  sched_param param{};
+  param.sched_priority = priority;
+  const int error = pthread_setschedparam(thread_.native_handle(), SCHED_FIFO, &param);
+  if (error != 0)
+  {
+    *why = std::string("SCHED_FIFO refused: ") + std::strerror(error) +
+           (error == EPERM ? " (the process needs CAP_SYS_NICE or an rtprio limit, limits.conf(5))" : "");
+    return false;
+  }
+  return true;
 }
 
 void CallbackThread::post(std::function<void()> work)

@@ -136,6 +136,10 @@ const ParameterTable<RosOptions>& rosOptionParameters()
     t.push_back(flagParameter("imu_thread", &R::imu_thread, start,
                               "imu/data served by a thread of its own (named pbc_imu): one thread wake-up per sample, "
                               "where a nodelet manager's queues take two; false: the node handle's callback queue"));
+    t.push_back(numberParameter("imu_thread_priority", &R::imu_thread_priority, start, closed(0.0, 99.0), "-",
+                                "real-time priority of the pbc_imu thread (SCHED_FIFO, 1-99): it then runs ahead of "
+                                "every ordinary thread of the machine; needs CAP_SYS_NICE or an rtprio limit "
+                                "(limits.conf), where refused a warning and ordinary scheduling; 0: ordinary"));
     return t;
   }();
   return table;
@@ -149,6 +153,12 @@ bool RosOptions::validate(std::string* why) const
   {
     if (why != nullptr)
       *why = "odom_frame and base_frame must differ (both '" + odom_frame + "')";
+    return false;
+  }
+  if (imu_thread_priority > 0 && !imu_thread)
+  {
+    if (why != nullptr)
+      *why = "imu_thread_priority needs imu_thread: true (the priority is that thread's)";
     return false;
   }
   return true;

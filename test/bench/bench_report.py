@@ -99,7 +99,11 @@ def nodelet_markdown(runs):
               'and gyro, its imu/data the answer). The harness receives every answer on a thread of its '
               'own. CPU time per message, over the messages sent: `process`, every thread of the process; '
               '`nodelet`, the same without the harness\'s two threads (its publisher and its receiver): the '
-              'nodelet measured, the manager\'s threads and roscpp\'s.' + _side_length(side))
+              'nodelet measured, the manager\'s threads and roscpp\'s. `SCHED_FIFO P, CPU N`: the threads a '
+              'sample passes through (the harness\'s publisher and receiver, the nodelet\'s own thread: the '
+              'compensator\'s `imu_thread_priority`) real-time at priority P and every thread of the process '
+              'on CPU N (`nodelet_benchmark --realtime-priority P --cpu N`), as on an autopilot computer '
+              'that keeps a core for the IMU.' + _side_length(side))
         print()
         print('| nodelet | input | sent | dropped | latency p50 [us] | p99 [us] | max [us] '
               '| CPU per message, process [us] | nodelet [us] |')
@@ -119,7 +123,11 @@ def nodelet_markdown(runs):
 def _side_name(f):
     """A side-by-side row's nodelet, and where its input is served when that is not the default."""
     name = f.get('nodelet', 'compensator')
-    return name + ", manager's queues" if f.get('queues') == 'manager' else name
+    if f.get('queues') == 'manager':
+        return name + ", manager's queues"
+    if int(f.get('realtime_priority', '0')) > 0:
+        return name + ', SCHED_FIFO %s, CPU %s' % (f['realtime_priority'], f.get('cpu', 'any'))
+    return name
 
 
 def _side_length(side):

@@ -6,6 +6,7 @@
 //                     [--closed-loop] [--stream] [--rss-csv FILE] [--rss-every N]
 //                     [--latency-csv FILE]
 //                     [--nodelet compensator|madgwick|relay] [--manager-queues]
+//                     [--realtime-priority P] [--cpu N]
 //
 // This program is the nodelet manager: a nodelet::Loader holding BenchSource (below) and, for
 // `intra`, the compensator nodelet loaded through pluginlib as `nodelet load` would. BenchSource
@@ -28,14 +29,23 @@
 // The compensator and the relay serve imu/data on a thread of their own (the compensator's
 // ~imu_thread, its default); --manager-queues puts it on the manager's queues instead. The
 // harness receives the answers on a thread of its own in every case.
+// --realtime-priority P schedules the threads a sample passes through at SCHED_FIFO priority P:
+// the harness's publisher and receiver and the measured nodelet's own imu/data thread (the
+// compensator's ~imu_thread_priority); not the manager's queues (so not with --manager-queues
+// or Madgwick's nodelet). Refused (no CAP_SYS_NICE): an error, nothing measured. --cpu N runs
+// every thread of the process on CPU N (with --realtime-priority: a thread woken by another is
+// woken on its CPU, not on an idle one that has to come out of its idle state first).
 // Output: one line of key=value pairs on stdout.
 #include <algorithm>
 #include <array>
 #include <atomic>
+#include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <condition_variable>
 #include <cstdint>
+#include <cstdlib>
+#include <cstring>
 #include <ctime>
 #include <fstream>
 #include <future>
@@ -88,7 +98,28 @@ struct Options
   std::string latency_csv;
   std::string nodelet = "compensator";  ///< the nodelet measured: compensator, madgwick or relay
   bool manager_queues = false;          ///< the measured nodelet's imu/data on the manager's queues
+  std::int64_t realtime_priority = 0;   ///< SCHED_FIFO priority of the sample's threads; 0: ordinary
+  std::int64_t cpu = -1;                ///< the one CPU of every thread; -1: any
 };
+
+/// Schedules `thread` at SCHED_FIFO `priority`: "" or why it was refused.
+std::string makeRealtime(pthread_t thread, int priority)
+{
+  sched_param param{};
+  param.sched_priority = priority;
+  const int error = pthread_setschedparam(thread, SCHED_FIFO, &param);
+  return error == 0 ? "" : std::string("SCHED_FIFO refused: ") + std::strerror(error);
+}
+
+/// Ends the process where a thread could not be made real-time after the probe in main() could:
+/// a nodelet's onInit() has no way to fail its load.
+void requireRealtime(const std::string& why)
+{
+  if (why.empty())
+    return;
+  std::cerr << "nodelet_benchmark: " << why << std::endl;
+  std::_Exit(1);
+}
 
 /// The nodelet measured: its plugin type and the topics it reads and answers on.
 struct Measured
@@ -113,7 +144,8 @@ const Measured& measured(const Options& o)
 class Relay : public nodelet::Nodelet
 {
 public:
-  explicit Relay(bool manager_queues) : manager_queues_(manager_queues)
+  Relay(bool manager_queues, int realtime_priority)
+    : manager_queues_(manager_queues), realtime_priority_(realtime_priority)
   {
   }
 
@@ -135,6 +167,9 @@ private:
     {
       thread_ = std::make_unique<pbc::CallbackThread>("relay");
       options.callback_queue = thread_->queue();
+      std::string why;
+      if (realtime_priority_ > 0 && !thread_->setRealtimePriority(realtime_priority_, &why))
+        requireRealtime(why);
     }
     sub_ = nh.subscribe(options);
   }
@@ -147,6 +182,7 @@ private:
   }
 
   bool manager_queues_;
+  int realtime_priority_;
   std::unique_ptr<pbc::CallbackThread> thread_;
   ros::Publisher pub_;
   ros::Subscriber sub_;
@@ -326,7 +362,7 @@ public:
               << " nodelet_cpu_us_per_msg=" << (process_cpu - harness_cpu) / messages * 1e6
               << " rss_kb=" << rssKilobytes() << " nodelet=" << options_.nodelet
               << " queues=" << (options_.manager_queues || options_.nodelet == "madgwick" ? "manager" : "own")
-              << std::endl;
+              << " realtime_priority=" << options_.realtime_priority << " cpu=" << options_.cpu << std::endl;
     if (!options_.rss_csv.empty())
     {
       std::ofstream csv(options_.rss_csv);
@@ -380,6 +416,13 @@ private:
     });
     receiver_clock_ = receiver_clock.get_future().get();
     thread_ = std::thread([this] { run(); });
+    if (options_.realtime_priority > 0)
+    {
+      std::string why;
+      if (!receiver_.setRealtimePriority(static_cast<int>(options_.realtime_priority), &why))
+        requireRealtime(why);
+      requireRealtime(makeRealtime(thread_.native_handle(), static_cast<int>(options_.realtime_priority)));
+    }
   }
 
   ros::Time stampOf(std::int64_t k) const
@@ -499,7 +542,8 @@ const char* kUsage =
     "usage: nodelet_benchmark --transport intra|tcp --scenario FILE.yaml --rate HZ --duration S\n"
     "                         [--closed-loop] [--stream] [--rss-csv FILE] [--rss-every N]\n"
     "                         [--latency-csv FILE]\n"
-    "                         [--nodelet compensator|madgwick|relay] [--manager-queues]\n";
+    "                         [--nodelet compensator|madgwick|relay] [--manager-queues]\n"
+    "                         [--realtime-priority P] [--cpu N]\n";
 
 /// The options, or nothing after --help.
 std::optional<Options> parseOptions(int argc, char** argv)
@@ -516,7 +560,9 @@ std::optional<Options> parseOptions(int argc, char** argv)
       .integer("--rss-every", &o.rss_every)
       .text("--latency-csv", &o.latency_csv)
       .text("--nodelet", &o.nodelet)
-      .flag("--manager-queues", &o.manager_queues);
+      .flag("--manager-queues", &o.manager_queues)
+      .integer("--realtime-priority", &o.realtime_priority)
+      .integer("--cpu", &o.cpu);
   if (!cli.parse(argc, argv))
     return std::nullopt;
   if ((o.transport != "intra" && o.transport != "tcp") || o.scenario.empty() || !(o.rate > 0.0) || !(o.duration > 0.0))
@@ -527,6 +573,13 @@ std::optional<Options> parseOptions(int argc, char** argv)
     throw pbc::UsageError(
         "--manager-queues is for the compensator or the relay with --transport intra (Madgwick's "
         "nodelet is always on them)");
+  if (o.realtime_priority < 0 || o.realtime_priority > 99 ||
+      (o.realtime_priority > 0 && (o.manager_queues || o.nodelet == "madgwick" || o.transport != "intra")))
+    throw pbc::UsageError(
+        "--realtime-priority is 0-99, for a nodelet on a thread of its own with --transport intra (the "
+        "compensator's or the relay's)");
+  if (o.cpu < -1)
+    throw pbc::UsageError("--cpu is a CPU number (0, 1, ...)");
   return o;
 }
 }  // namespace
@@ -541,6 +594,24 @@ int main(int argc, char** argv)
     if (!parsed)
       return 0;
     options = *parsed;
+    if (options.cpu >= 0)
+    {
+      // Before any thread starts: every thread inherits it.
+      cpu_set_t cpus;
+      CPU_ZERO(&cpus);
+      CPU_SET(static_cast<int>(options.cpu), &cpus);
+      if (sched_setaffinity(0, sizeof(cpus), &cpus) != 0)
+        throw pbc::UsageError("--cpu " + std::to_string(options.cpu) + ": " + std::strerror(errno));
+    }
+    if (options.realtime_priority > 0)
+    {
+      // Refused here, before anything is loaded, rather than in a nodelet's onInit().
+      const std::string why = makeRealtime(pthread_self(), static_cast<int>(options.realtime_priority));
+      if (!why.empty())
+        throw pbc::UsageError("--realtime-priority: " + why + " (run with CAP_SYS_NICE)");
+      const sched_param ordinary{};
+      pthread_setschedparam(pthread_self(), SCHED_OTHER, &ordinary);
+    }
   }
   catch (const pbc::UsageError& e)
   {
@@ -558,7 +629,7 @@ int main(int argc, char** argv)
       }
       if (type == kRelay.type)
       {
-        return boost::make_shared<Relay>(options.manager_queues);
+        return boost::make_shared<Relay>(options.manager_queues, static_cast<int>(options.realtime_priority));
       }
       return plugins.createInstance(type);
     });
@@ -574,7 +645,10 @@ int main(int argc, char** argv)
     // The compensator's imu/data on a thread of its own (its default) or on the manager's queues
     // (the parameter is removed again at the end: a compensator_node started later reads its own).
     if (options.transport == "intra")
+    {
       ros::param::set("/compensator/imu_thread", !options.manager_queues);
+      ros::param::set("/compensator/imu_thread_priority", static_cast<int>(options.realtime_priority));
+    }
     const Measured& m = measured(options);
     if (options.transport == "intra" && !manager.load("/" + options.nodelet, m.type, no_remappings, no_argv))
     {
@@ -587,6 +661,7 @@ int main(int argc, char** argv)
     source->finish();
     manager.clear();
     ros::param::del("/compensator/imu_thread");
+    ros::param::del("/compensator/imu_thread_priority");
   }
   catch (const std::exception& e)
   {

@@ -96,6 +96,8 @@ class RenderTest(unittest.TestCase):
                  {'label': '2.8 kHz', 'group': 'side-by-side',
                   'fields': dict(base, nodelet='compensator', queues='manager', p50_us='99')},
                  {'label': '2.8 kHz', 'group': 'side-by-side', 'fields': dict(base, nodelet='relay', p50_us='55')},
+                 {'label': '2.8 kHz', 'group': 'side-by-side',
+                  'fields': dict(base, nodelet='relay', realtime_priority='50', cpu='1', p50_us='44')},
                  {'label': '2.8 kHz', 'group': 'side-by-side', 'fields': dict(base, nodelet='madgwick', dropped='7')}]
         md = render(results)
         self.assertIn('| compensator | 2.8 kHz | %s | %s | 111 | 222 | 333 | 4.6 | 1.2 |' % (base['sent'], base['dropped']), md)
@@ -103,6 +105,9 @@ class RenderTest(unittest.TestCase):
                       % (base['sent'], base['dropped']), md)
         self.assertIn('| madgwick | 2.8 kHz | %s | 7 | 111 | 222 | 333 | 4.6 | 1.2 |' % base['sent'], md)
         self.assertIn('| relay | 2.8 kHz | %s | %s | 55 | 222 | 333 | 4.6 | 1.2 |' % (base['sent'], base['dropped']), md)
+        self.assertIn('| relay, SCHED_FIFO 50, CPU 1 | 2.8 kHz | %s | %s | 44 | 222 | 333 | 4.6 | 1.2 |'
+                      % (base['sent'], base['dropped']), md)
+        self.assertIn('`SCHED_FIFO P, CPU N`: the threads a sample passes through', md)
         self.assertNotIn('Madgwick not measured', md)
         # Whether the fastest runs cover the start-up alone is said from their length.
         long_runs = dict(base, sent=str(int(40 * float(base['input_rate']))))
@@ -111,7 +116,7 @@ class RenderTest(unittest.TestCase):
                              (short_runs, 'The 2.8 kHz runs last 10 s: the start-up (calibration window, first '
                                           'designs) alone.')):
             timed = copy.deepcopy(results)
-            for run in timed['sections']['nodelet']['runs'][-4:]:
+            for run in timed['sections']['nodelet']['runs'][-5:]:
                 run['fields'].update(sent=fields['sent'])
             self.assertIn(said, render(timed))
         # The side-by-side runs stay out of the transport table.

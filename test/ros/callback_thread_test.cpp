@@ -1,6 +1,8 @@
 // CallbackThread without a master: work posted to it runs on its own, named thread, in
-// order, and its destructor waits for the callback it is running.
+// order, its destructor waits for the callback it is running, and a real-time priority is its
+// thread's alone.
 #include <pthread.h>
+#include <sched.h>
 
 #include <atomic>
 #include <chrono>
@@ -9,6 +11,7 @@
 #include <mutex>
 #include <string>
 #include <thread>
+#include <utility>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -80,6 +83,59 @@ TEST(CallbackThread, DestructionWaitsForTheRunningCallback)
       std::this_thread::yield();
   }
   EXPECT_TRUE(finished);
+}
+
+namespace
+{
+/// The calling thread's scheduling policy and priority.
+std::pair<int, int> scheduling()
+{
+  int policy = -1;
+  sched_param param{};
+  pthread_getschedparam(pthread_self(), &policy, &param);
+  return { policy, param.sched_priority };
+}
+
+/// The scheduling of `thread`'s thread, read on it.
+std::pair<int, int> schedulingOf(CallbackThread* thread)
+{
+  std::promise<std::pair<int, int>> seen;
+  thread->post([&] { seen.set_value(scheduling()); });
+  auto future = seen.get_future();
+  EXPECT_EQ(future.wait_for(std::chrono::seconds(10)), std::future_status::ready);
+  return future.get();
+}
+}  // namespace
+
+// Granted (CAP_SYS_NICE or an rtprio limit), the thread runs SCHED_FIFO at that priority and the
+// caller keeps its own scheduling; refused, the thread keeps its scheduling and the reason says
+// why. Out-of-range priorities are refused before the system is asked.
+TEST(CallbackThread, RealtimePriorityIsTheThreadsOwnOrRefusedWithTheReason)
+{
+  CallbackThread thread("pbc_test");
+  const std::pair<int, int> before = schedulingOf(&thread);
+  const std::pair<int, int> caller = scheduling();
+  EXPECT_EQ(before.first, SCHED_OTHER);
+  std::string why;
+  for (int out_of_range : { 0, -1, 100 })
+  {
+    EXPECT_FALSE(thread.setRealtimePriority(out_of_range, &why));
+    EXPECT_NE(why.find("outside SCHED_FIFO's 1-99"), std::string::npos) << why;
+    EXPECT_EQ(schedulingOf(&thread), before);
+  }
+  why.clear();
+  const bool granted = thread.setRealtimePriority(10, &why);
+  if (granted)
+  {
+    EXPECT_TRUE(why.empty()) << why;
+    EXPECT_EQ(schedulingOf(&thread), std::make_pair(static_cast<int>(SCHED_FIFO), 10));
+  }
+  else
+  {
+    EXPECT_NE(why.find("SCHED_FIFO refused: "), std::string::npos) << why;
+    EXPECT_EQ(schedulingOf(&thread), before);
+  }
+  EXPECT_EQ(scheduling(), caller);
 }
 
 int main(int argc, char** argv)

@@ -296,6 +296,10 @@ TEST(Parameters, ErrorsNameTheKey)
   EXPECT_NE(why.find("path_rate"), std::string::npos) << why;
   EXPECT_FALSE(readYaml("odom_frame: base_link\n", &params, &why));
   EXPECT_NE(why.find("odom_frame"), std::string::npos) << why;
+  EXPECT_FALSE(readYaml("imu_thread_priority: 100\n", &params, &why));
+  EXPECT_NE(why.find("imu_thread_priority = 100 is out of range [0, 99]"), std::string::npos) << why;
+  EXPECT_FALSE(readYaml("imu_thread: false\nimu_thread_priority: 20\n", &params, &why));
+  EXPECT_NE(why.find("imu_thread_priority needs imu_thread: true"), std::string::npos) << why;
   EXPECT_THROW(YamlParameterSource("/nonexistent/params.yaml"), std::runtime_error);
   EXPECT_THROW(readYaml("- a\n- b\n", &params, &why), std::runtime_error);
 
@@ -305,6 +309,8 @@ TEST(Parameters, ErrorsNameTheKey)
   EXPECT_EQ(ok.core.harmonics, 3);
   EXPECT_DOUBLE_EQ(ok.core.fft_window, 40.0);
   EXPECT_EQ(ok.ros.imu_frame, "imu_link");
+  ASSERT_TRUE(readYaml("imu_thread_priority: 20\n", &ok, &why)) << why;
+  EXPECT_EQ(ok.ros.imu_thread_priority, 20);
 }
 
 namespace

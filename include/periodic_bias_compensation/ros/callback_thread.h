@@ -6,6 +6,7 @@
 
 #include <atomic>
 #include <functional>
+#include <string>
 #include <thread>
 
 #include <ros/callback_queue.h>
@@ -22,6 +23,12 @@ public:
   ~CallbackThread();
   CallbackThread(const CallbackThread&) = delete;
   CallbackThread& operator=(const CallbackThread&) = delete;
+
+  /// Schedules the thread first-in first-out at `priority` (SCHED_FIFO, 1-99): it then runs
+  /// whenever it has work, ahead of every ordinary thread of the machine. False with the reason
+  /// in *why when `priority` is out of range or the system refuses (a process needs CAP_SYS_NICE
+  /// or an rtprio limit, limits.conf(5)); the thread then keeps its scheduling.
+  bool setRealtimePriority(int priority, std::string* why);
 
   /// Runs `work` on the thread, after the callbacks already queued.
   void post(std::function<void()> work);
