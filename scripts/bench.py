@@ -443,6 +443,11 @@ def run(args):
     results = load(args.json)
     commit = subprocess.run(['git', '-C', REPO, 'rev-parse', '--short', 'HEAD'], stdout=subprocess.PIPE,
                             universal_newlines=True).stdout.strip()
+    # Sources that differ from that commit (the JSON and the docs it renders aside) are said so.
+    changed = subprocess.run(['git', '-C', REPO, 'status', '--porcelain', '--untracked-files=no', '--', '.',
+                              ':!docs'], stdout=subprocess.PIPE, universal_newlines=True).stdout.strip()
+    if changed:
+        commit += ' with uncommitted changes'
     model, cores = machine()
     now = datetime.datetime.now(datetime.timezone.utc)
     run_info = {'id': now.strftime('%Y%m%dT%H%M%SZ'), 'date': now.strftime('%Y-%m-%d'), 'commit': commit,
