@@ -46,7 +46,7 @@ from bench_tables import parse_blocks  # noqa: E402
 JSON = os.path.join(REPO, 'docs', 'bench', 'results.json')
 OUT = os.path.join(REPO, 'docs', 'benchmarks.md')
 TEMPLATE = os.path.join(REPO, 'docs', 'bench', 'benchmarks.md.in')
-# The one CPU of the real-time side-by-side runs (any the machine has; two is the least).
+# The CPU the real-time side-by-side runs are pinned to (the machines measured have two).
 REALTIME_CPU = 1
 TARGETS = ('core_benchmark', 'core_latency', 'evaluate_compensator', 'nodelet_benchmark', 'bag_read_floor', 'simulate_imu',
            'compensate_bag', 'test_core')
@@ -240,9 +240,9 @@ class Bench:
 
     def nodelet_side_by_side(self):
         """The compensator (imu/data on its own thread, then on the manager's queues), the harness's
-        own relay (both also real-time, on one CPU) and imu_tools' Madgwick nodelet in the same harness, in-process, paced at 100 Hz,
-        1 kHz and 2.8 kHz: latency and CPU time per message (the process's, and without the
-        harness's threads)."""
+        own relay (both also real-time on one CPU) and imu_tools' Madgwick nodelet in the same
+        harness, in-process, paced at 100 Hz, 1 kHz and 2.8 kHz: latency and CPU time per message
+        (the process's, and without the harness's threads)."""
         madgwick = self.madgwick_env()
         log('nodelet side by side: 100 Hz, 1 kHz, 2.8 kHz, with the relay' + (' and Madgwick' if madgwick else ''))
         runs = []

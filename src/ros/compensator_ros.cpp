@@ -139,9 +139,14 @@ CompensatorRos::CompensatorRos(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh
     imu_thread_ = std::make_unique<CallbackThread>("pbc_imu");
     imu_options.callback_queue = imu_thread_->queue();
     std::string why;
-    if (params_.ros.imu_thread_priority > 0 && !imu_thread_->setRealtimePriority(params_.ros.imu_thread_priority, &why))
-      ROS_WARN("imu_thread_priority %d not applied, pbc_imu runs as an ordinary thread: %s",
-               params_.ros.imu_thread_priority, why.c_str());
+    if (params_.ros.imu_thread_priority > 0)
+    {
+      if (imu_thread_->setRealtimePriority(params_.ros.imu_thread_priority, &why))
+        ROS_INFO("pbc_imu runs real-time (SCHED_FIFO, priority %d)", params_.ros.imu_thread_priority);
+      else
+        ROS_WARN("imu_thread_priority %d not applied, pbc_imu runs as an ordinary thread: %s",
+                 params_.ros.imu_thread_priority, why.c_str());
+    }
   }
   imu_sub_ = nh_.subscribe(imu_options);
   ROS_INFO("bias compensation (%s mode) listening on %s, publishing %s and %s", toString(params_.core.mode).c_str(),
