@@ -121,7 +121,8 @@ def nodelet_markdown(runs):
 
 
 def _side_name(f):
-    """A side-by-side row's nodelet, and where its input is served when that is not the default."""
+    """A side-by-side row's nodelet, and where its input is served or how its threads are scheduled
+    when that is not the default."""
     name = f.get('nodelet', 'compensator')
     if f.get('queues') == 'manager':
         return name + ", manager's queues"
