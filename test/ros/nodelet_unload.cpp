@@ -1,7 +1,15 @@
 // The compensator nodelet unloaded while samples arrive, then loaded again, several times, into
 // the same manager (nodelet_unload.test): the unload waits for the sample being handled and
 // drops the ones queued, so the manager survives and every load answers again. Both ways imu/data
-// is served: a thread of the nodelet's own (~imu_thread, the default) and the manager's queues.
+// is served: a thread of the nodelet's own (~imu_thread, the default) and the manager's queues;
+// one load makes that thread real-time (~imu_thread_priority), as far as this machine allows.
+#include <dirent.h>
+#include <pthread.h>
+#include <sched.h>
+#include <sys/types.h>
+
+#include <cstdint>
+#include <fstream>
 #include <string>
 #include <vector>
 
@@ -9,6 +17,10 @@
 #include <nodelet/NodeletList.h>
 #include <nodelet/NodeletLoad.h>
 #include <nodelet/NodeletUnload.h>
+#include <ros/master.h>
+#include <ros/network.h>
+#include <ros/this_node.h>
+#include <xmlrpcpp/XmlRpcClient.h>
 
 #include "fault_helpers.h"
 
@@ -31,6 +43,59 @@ bool unload()
   return ros::service::call("/manager/unload_nodelet", srv) && srv.response.success;
 }
 
+/// The process id of the node `name` (its XML-RPC getPid); -1 when it does not answer.
+pid_t nodePid(const std::string& name)
+{
+  XmlRpc::XmlRpcValue args, result, payload;
+  args[0] = ros::this_node::getName();
+  args[1] = name;
+  if (!ros::master::execute("lookupNode", args, result, payload, false))
+    return -1;
+  std::string host;
+  std::uint32_t port = 0;
+  if (!ros::network::splitURI(static_cast<std::string>(payload), host, port))
+    return -1;
+  XmlRpc::XmlRpcClient client(host.c_str(), static_cast<int>(port), "/");
+  XmlRpc::XmlRpcValue request;
+  request[0] = ros::this_node::getName();
+  if (!client.execute("getPid", request, result) || result.getType() != XmlRpc::XmlRpcValue::TypeArray ||
+      static_cast<int>(result[0]) != 1)
+    return -1;
+  return static_cast<pid_t>(static_cast<int>(result[2]));
+}
+
+/// The ids of the threads named pbc_imu in process `pid`.
+std::vector<pid_t> imuThreads(pid_t pid)
+{
+  std::vector<pid_t> found;
+  const std::string tasks = "/proc/" + std::to_string(pid) + "/task";
+  DIR* dir = opendir(tasks.c_str());
+  if (dir == nullptr)
+    return found;
+  while (const dirent* task = readdir(dir))
+  {
+    std::string name;
+    std::getline(std::ifstream(tasks + "/" + task->d_name + "/comm"), name);
+    if (name == "pbc_imu")
+      found.push_back(static_cast<pid_t>(std::stol(task->d_name)));
+  }
+  closedir(dir);
+  return found;
+}
+
+/// Whether a process of this user may make a thread SCHED_FIFO (tried on the calling thread, then
+/// undone): the manager, started the same way, may then too.
+bool realtimeAllowed()
+{
+  sched_param param{};
+  param.sched_priority = 1;
+  if (pthread_setschedparam(pthread_self(), SCHED_FIFO, &param) != 0)
+    return false;
+  param.sched_priority = 0;
+  pthread_setschedparam(pthread_self(), SCHED_OTHER, &param);
+  return true;
+}
+
 /// The nodelets the manager holds; false when it does not answer.
 bool listed(std::vector<std::string>* nodelets)
 {
@@ -51,13 +116,30 @@ TEST(NodeletUnload, UnloadWhileSamplesArriveLeavesTheManagerWorking)
   stream.rate = 1000.0;
   stream.amplitude = 0.3;
   stream.start();
+  const bool realtime_allowed = realtimeAllowed();
+  const pid_t manager = nodePid("/manager");
+  ASSERT_GT(manager, 0) << "the manager's process id is not known";
   for (int cycle = 0; cycle < 6; ++cycle)
   {
     const bool own_thread = cycle % 2 == 0;
-    SCOPED_TRACE("cycle " + std::to_string(cycle) + (own_thread ? ", own thread" : ", manager's queues"));
+    const int priority = cycle == 2 ? 10 : 0;
+    SCOPED_TRACE("cycle " + std::to_string(cycle) + (own_thread ? ", own thread" : ", manager's queues") +
+                 ", priority " + std::to_string(priority));
     ros::param::set(std::string(kName) + "/imu_thread", own_thread);
+    ros::param::set(std::string(kName) + "/imu_thread_priority", priority);
     ASSERT_TRUE(load()) << "the compensator did not load";
     ASSERT_TRUE(observer.waitForOdometry(500, 30.0)) << "no odometry/filtered after the load";
+    const std::vector<pid_t> threads = imuThreads(manager);
+    ASSERT_EQ(threads.size(), own_thread ? 1u : 0u);
+    if (own_thread)
+    {
+      // Refused, the thread runs as an ordinary one (and a WARN says why).
+      const bool realtime = priority > 0 && realtime_allowed;
+      sched_param param{};
+      ASSERT_EQ(sched_getparam(threads[0], &param), 0);
+      EXPECT_EQ(sched_getscheduler(threads[0]), realtime ? SCHED_FIFO : SCHED_OTHER);
+      EXPECT_EQ(param.sched_priority, realtime ? priority : 0);
+    }
     // Unloaded in the middle of the stream: a sample is being handled or queued at that moment.
     ASSERT_TRUE(unload()) << "the compensator did not unload";
     std::vector<std::string> held;
