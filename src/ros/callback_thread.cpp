@@ -48,7 +48,7 @@ CallbackThread::CallbackThread(const char* name)
   pthread_setname_np(thread_.native_handle(), shortened);
 }
 
-bool CallbackThread::setRealtimePriority(int priority, std::string* why)
+bool setRealtimePriority(pthread_t thread, int priority, std::string* why)
 {
   const int lowest = sched_get_priority_min(SCHED_FIFO);
   const int highest = sched_get_priority_max(SCHED_FIFO);
@@ -60,7 +60,7 @@ bool CallbackThread::setRealtimePriority(int priority, std::string* why)
   }
   sched_param param{};
   param.sched_priority = priority;
-  const int error = pthread_setschedparam(thread_.native_handle(), SCHED_FIFO, &param);
+  const int error = pthread_setschedparam(thread, SCHED_FIFO, &param);
   if (error != 0)
   {
     *why = std::string("SCHED_FIFO refused: ") + std::strerror(error) +

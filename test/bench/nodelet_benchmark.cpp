@@ -102,20 +102,12 @@ struct Options
   std::int64_t cpu = -1;                ///< the one CPU of every thread; -1: any
 };
 
-/// Schedules `thread` at SCHED_FIFO `priority`: "" or why it was refused.
-std::string makeRealtime(pthread_t thread, int priority)
+/// Ends the process where a thread was not made real-time (`granted` false, `why` from
+/// setRealtimePriority): after the probe in main() was granted that is unexpected, and a
+/// nodelet's onInit() has no way to fail its load.
+void requireRealtime(bool granted, const std::string& why)
 {
-  sched_param param{};
-  param.sched_priority = priority;
-  const int error = pthread_setschedparam(thread, SCHED_FIFO, &param);
-  return error == 0 ? "" : std::string("SCHED_FIFO refused: ") + std::strerror(error);
-}
-
-/// Ends the process where a thread could not be made real-time after the probe in main() could:
-/// a nodelet's onInit() has no way to fail its load.
-void requireRealtime(const std::string& why)
-{
-  if (why.empty())
+  if (granted)
     return;
   std::cerr << "nodelet_benchmark: " << why << std::endl;
   std::_Exit(1);
@@ -168,8 +160,8 @@ private:
       thread_ = std::make_unique<pbc::CallbackThread>("relay");
       options.callback_queue = thread_->queue();
       std::string why;
-      if (realtime_priority_ > 0 && !thread_->setRealtimePriority(realtime_priority_, &why))
-        requireRealtime(why);
+      if (realtime_priority_ > 0)
+        requireRealtime(thread_->setRealtimePriority(realtime_priority_, &why), why);
     }
     sub_ = nh.subscribe(options);
   }
@@ -418,10 +410,10 @@ private:
     thread_ = std::thread([this] { run(); });
     if (options_.realtime_priority > 0)
     {
+      const int priority = static_cast<int>(options_.realtime_priority);
       std::string why;
-      if (!receiver_.setRealtimePriority(static_cast<int>(options_.realtime_priority), &why))
-        requireRealtime(why);
-      requireRealtime(makeRealtime(thread_.native_handle(), static_cast<int>(options_.realtime_priority)));
+      requireRealtime(receiver_.setRealtimePriority(priority, &why), why);
+      requireRealtime(pbc::setRealtimePriority(thread_.native_handle(), priority, &why), why);
     }
   }
 
@@ -606,9 +598,9 @@ int main(int argc, char** argv)
     if (options.realtime_priority > 0)
     {
       // Refused here, before anything is loaded, rather than in a nodelet's onInit().
-      const std::string why = makeRealtime(pthread_self(), static_cast<int>(options.realtime_priority));
-      if (!why.empty())
-        throw pbc::UsageError("--realtime-priority: " + why + " (run with CAP_SYS_NICE)");
+      std::string why;
+      if (!pbc::setRealtimePriority(pthread_self(), static_cast<int>(options.realtime_priority), &why))
+        throw pbc::UsageError("--realtime-priority: " + why);
       const sched_param ordinary{};
       pthread_setschedparam(pthread_self(), SCHED_OTHER, &ordinary);
     }

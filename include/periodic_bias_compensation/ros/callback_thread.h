@@ -9,10 +9,18 @@
 #include <string>
 #include <thread>
 
+#include <pthread.h>
+
 #include <ros/callback_queue.h>
 
 namespace periodic_bias_compensation
 {
+/// Schedules `thread` first-in first-out at `priority` (SCHED_FIFO, 1-99): it then runs whenever
+/// it has work, ahead of every ordinary thread of the machine. False with the reason in *why when
+/// `priority` is out of range or the system refuses (a process needs CAP_SYS_NICE or an rtprio
+/// limit, limits.conf(5)); the thread then keeps its scheduling.
+bool setRealtimePriority(pthread_t thread, int priority, std::string* why);
+
 class CallbackThread
 {
 public:
@@ -24,11 +32,11 @@ public:
   CallbackThread(const CallbackThread&) = delete;
   CallbackThread& operator=(const CallbackThread&) = delete;
 
-  /// Schedules the thread first-in first-out at `priority` (SCHED_FIFO, 1-99): it then runs
-  /// whenever it has work, ahead of every ordinary thread of the machine. False with the reason
-  /// in *why when `priority` is out of range or the system refuses (a process needs CAP_SYS_NICE
-  /// or an rtprio limit, limits.conf(5)); the thread then keeps its scheduling.
-  bool setRealtimePriority(int priority, std::string* why);
+  /// The free setRealtimePriority() on this thread.
+  bool setRealtimePriority(int priority, std::string* why)
+  {
+    return periodic_bias_compensation::setRealtimePriority(thread_.native_handle(), priority, why);
+  }
 
   /// Runs `work` on the thread, after the callbacks already queued.
   void post(std::function<void()> work);
