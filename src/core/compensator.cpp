@@ -41,9 +41,11 @@ constexpr double kDecimatedRateFactor = 5.0;
 /// replayed over the next calibration_duration / (kReplayPerSample - 1) instead of within one
 /// sample's call, its outputs held until it has caught up.
 constexpr std::size_t kReplayPerSample = 64;
-/// From the calibration window's end to taking up its period search, which runs on the core's
-/// design thread meanwhile (milliseconds over a window of 10 s at 1 kHz and more) [s of data].
-constexpr double kWindowSearchDelay = 0.2;
+/// From a period search's last sample to taking up its result, the search running on the core's
+/// design thread meanwhile [s of data]: the calibration window's (milliseconds over 10 s at 1 kHz
+/// and more) and each fft_hop's (tens of microseconds, on memory the sample's call would
+/// otherwise have to fetch after sleeping between samples).
+constexpr double kSearchDelay = 0.2;
 
 bool isFinite(const Vector3& v)
 {
@@ -546,7 +548,9 @@ private:
       });
     }
     hop_samples_ = std::max(1, static_cast<int>(std::lround(config_.fft_hop * rate)));
+    search_delay_ = std::clamp(static_cast<int>(std::lround(kSearchDelay * rate)), 1, hop_samples_);
     since_analysis_ = 0;
+    hop_search_ = {};
   }
 
   /// Forgets the integrated motion and period search, keeps bias, level and sample rate.
@@ -573,6 +577,7 @@ private:
       axis.time_since_reset = 0.0;
     }
     since_analysis_ = 0;
+    hop_search_ = {};
   }
 
   /// Axis i's broadband wave estimate as configured: z the vertical one, each reading the other
@@ -598,7 +603,7 @@ private:
 
   /// Ends the calibration window at its last sample s: the level frame from its mean specific
   /// force, then each level axis's constant bias (windowOffset). A period search over the window
-  /// runs on the core's design thread and is taken up kWindowSearchDelay of data later (the
+  /// runs on the core's design thread and is taken up kSearchDelay of data later (the
   /// samples meanwhile wait in the window, each processed as during it, outputs held); a window
   /// at rest or a bias from a file finishes at once.
   void endCalibrationWindow(const ImuSample& s, double dt, CompensatorOutput* out)
@@ -618,7 +623,7 @@ private:
                                             config_.min_peak_ratio,
                                             config_.harmonics };
       if (!options.at_rest)
-        window_due_ += kWindowSearchDelay;
+        window_due_ += kSearchDelay;
       for (int i = 0; i < 3; ++i)
         window_search_[i] = designTask(
             [axes, options, i] {
@@ -696,7 +701,7 @@ private:
   /// arrive while its period search runs, and those that arrive while it catches up.
   static std::size_t replayCapacity(std::size_t window, double rate)
   {
-    const std::size_t queued = window + static_cast<std::size_t>(std::ceil(kWindowSearchDelay * rate)) + 1;
+    const std::size_t queued = window + static_cast<std::size_t>(std::ceil(kSearchDelay * rate)) + 1;
     return queued + queued / (kReplayPerSample - 1) + kReplayPerSample;
   }
 
@@ -762,10 +767,14 @@ private:
         axes_[i].drift.setBias(provisional[i]);
     }
 
+    // Every hop_samples_ the period searches of the three axes start, on the core's design thread;
+    // search_delay_ samples later they are taken up (before the next ones start).
     ++since_analysis_;
+    const bool take_up = since_analysis_ == search_delay_ && hop_search_.valid();
     const bool analyse = since_analysis_ >= hop_samples_;
     if (analyse)
       since_analysis_ = 0;
+    std::array<std::function<FrequencySearch()>, 3> searches;
 
     for (int i = 0; i < 3; ++i)
     {
@@ -784,8 +793,10 @@ private:
                                ? a[i] - (calibrated_ && config_.enable_constant ? constant_bias_[i] : 0.0)
                                : compensated,
                            s.t);
+        if (take_up && config_.enable_periodic)
+          updateFrequency(axis, awaitDesign(hop_search_)[i]);
         if (analyse && config_.enable_periodic)
-          updateFrequency(axis);
+          searches[i] = search(axis);
       }
       AxisState& state = out.axes[i];
       if (config_.mode == Mode::kDefault)
@@ -801,6 +812,20 @@ private:
       out.acceleration_level[i] = compensated;
       out.acceleration_constant_compensated[i] = a[i] - (config_.enable_constant ? constant_bias_[i] : 0.0);
     }
+    if (take_up)
+      hop_search_ = {};
+    if (searches[0])
+    {
+      hop_search_ = designTask(
+          [searches] {
+            std::array<FrequencySearch, 3> found;
+            for (int i = 0; i < 3; ++i)
+              found[i] = searches[i]();
+            return found;
+          },
+          background_designs_);
+      search_time_ = now_;
+    }
     // Default mode: its wave outputs estimate the IMU's wave band, of which R r's is taken off.
     // Paper mode describes the IMU itself, as in the paper.
     if (config_.mode == Mode::kDefault)
@@ -813,7 +838,9 @@ private:
     return out;
   }
 
-  void updateFrequency(AxisEstimator& axis)
+  /// The period search of the hop that ends at this sample, as a task (taken up search_delay_
+  /// samples later by updateFrequency()).
+  std::function<FrequencySearch()> search(AxisEstimator& axis)
   {
     const double f_max = std::min(config_.max_frequency, 0.45 * rate_);
     // The whole window finds long periods (a swell); a period that also fits three times in the
@@ -823,20 +850,23 @@ private:
     // window): its loop needs the period as it is now, and on the x-io oscillation rig the whole
     // window's dominant period moved its end error from 0.021 to 2.6 m.
     const int recent = static_cast<int>(kRecentFftWindow * rate_);
-    int span_samples = std::min(axis.tracker->samples(), recent);
-    const FrequencyEstimate estimate =
-        config_.mode == Mode::kPaper
-            ? axis.tracker->analyse(config_.min_frequency, f_max, config_.min_peak_ratio, recent)
-            : axis.tracker->analyseFreshest(config_.min_frequency, f_max, config_.min_peak_ratio, recent,
-                                            &span_samples);
+    return axis.tracker->searchTask(config_.min_frequency, f_max, config_.min_peak_ratio, recent,
+                                    config_.mode == Mode::kDefault);
+  }
+
+  /// Takes up a period search made over the window as it stood at search_time_.
+  void updateFrequency(AxisEstimator& axis, const FrequencySearch& found)
+  {
+    const FrequencyEstimate& estimate = found.estimate;
+    const int span_samples = found.span_samples;
     const double span = span_samples / rate_;
     // Only estimates over a span that no longer grows go into the drift regression.
-    const bool whole_span = axis.tracker->full() || span_samples < axis.tracker->samples();
+    const bool whole_span = found.full || span_samples < found.samples;
     if (!estimate.locked)
     {
       // A window shorter than three periods of a held lock (seeded at the end of calibration)
       // cannot disprove it yet.
-      const bool too_short = axis.locked && axis.tracker->samples() < 3.0 * rate_ / axis.frequency;
+      const bool too_short = axis.locked && found.samples < 3.0 * rate_ / axis.frequency;
       if (axis.locked && !too_short)
         axis.wave.retire();
       axis.locked = axis.locked && too_short;
@@ -845,13 +875,13 @@ private:
     const bool jump = !axis.locked || std::abs(estimate.frequency - axis.frequency) > 0.2 * axis.frequency;
     // Nor can a filling window move a held lock by more than 20 % before it spans kResolvePeriods
     // of it (its resolution, 1 / span, is then a tenth of the lock's frequency or finer).
-    if (jump && axis.locked && !axis.tracker->full() &&
-        axis.tracker->samples() < kResolvePeriods * rate_ / axis.frequency)
+    if (jump && axis.locked && !found.full && found.samples < kResolvePeriods * rate_ / axis.frequency)
       return;
     // A new horizontal lock is fitted to the last period of input: within a period of a turn that
     // holds the turn's centripetal acceleration, which the model would then describe as a wave.
+    // (The time since the last yaw as it was at the search's last sample, or negative.)
     if (jump && config_.mode == Mode::kDefault && &axis != &axes_[2] &&
-        turns_.sinceYaw() < std::max(1.0 / estimate.frequency, config_.harmonic_memory))
+        turns_.sinceYaw() - (now_ - search_time_) < std::max(1.0 / estimate.frequency, config_.harmonic_memory))
       return;
     axis.locked = true;
     axis.frequency = estimate.frequency;
@@ -865,7 +895,7 @@ private:
       const double broadband = config_.heave_filter && config_.enable_periodic ? axis.broadband.weight() : 0.0;
       axis.drift.shiftVelocity(-(1.0 - broadband) * axis.wave.startVelocity());
     }
-    axis.frequency_drift.add(now_, axis.frequency, span, whole_span, config_.fft_hop);
+    axis.frequency_drift.add(search_time_, axis.frequency, span, whole_span, config_.fft_hop);
   }
 
   /// Default mode with heave_filter: the broadband wave estimate of axis i (BroadbandWave),
@@ -1031,9 +1061,12 @@ private:
   double planned_rate_ = 0.0;                                      ///< rate the FFT windows were planned for [Hz]
   int hop_samples_ = 1;
   int since_analysis_ = 0;
-  double now_ = 0.0;                 ///< time of the sample being processed [s]
-  Vector3 level_ = Vector3::Zero();  ///< its level acceleration [m/s^2]
-  TurnDetector turns_;               ///< turns told from the yaw a sea induces (wave estimate)
+  int search_delay_ = 1;                                           ///< kSearchDelay in samples, 1..hop_samples_
+  std::shared_future<std::array<FrequencySearch, 3>> hop_search_;  ///< the last hop's, until taken up
+  double search_time_ = 0.0;                                       ///< the last hop's sample time [s]
+  double now_ = 0.0;                                               ///< time of the sample being processed [s]
+  Vector3 level_ = Vector3::Zero();                                ///< its level acceleration [m/s^2]
+  TurnDetector turns_;  ///< turns told from the yaw a sea induces (wave estimate)
 
   Leveller leveller_;
   LeverArm lever_;            ///< the IMU's offset taken off the wave outputs

@@ -33,8 +33,9 @@ FrequencyTracker::FrequencyTracker(int window_samples, double sample_rate, int d
   if (!(sample_rate > 0.0) || !std::isfinite(sample_rate))
     throw std::invalid_argument("FrequencyTracker: sample rate must be positive");
   moving_.assign(decimation_, 0.0);
-  ring_.assign(n_, 0.0);
-  times_.assign(n_, 0.0);
+  ring_ = std::make_shared<Ring>();
+  ring_->values.assign(2 * static_cast<std::size_t>(n_), 0.0);
+  ring_->times.assign(2 * static_cast<std::size_t>(n_), 0.0);
   fft_size_ = fastFftSize(n_);
   background_ = background;
   if (!background)
@@ -56,8 +57,9 @@ FrequencyTracker::~FrequencyTracker()
 {
   if (!background_)
     return;
-  // After the plan's own task: the plan, made or taken, is dropped on the planning thread.
-  auto plan = std::make_shared<std::unique_ptr<Plan>>(std::move(plan_));
+  // After the plan's own task: the plan, made or taken, is dropped on the planning thread (or on
+  // the design thread by a search still under way there, which holds it too).
+  auto plan = std::make_shared<std::shared_ptr<Plan>>(std::move(plan_));
   auto pending = std::make_shared<std::future<std::unique_ptr<Plan>>>(std::move(planning_));
   planInBackground([plan = std::move(plan), pending = std::move(pending)] {
     if (pending->valid())
@@ -89,9 +91,12 @@ void FrequencyTracker::push(double value, double t)
 
 void FrequencyTracker::store(double value, double t)
 {
-  times_[head_] = t;
-  ring_[head_] = value;
-  head_ = (head_ + 1) % n_;
+  // A search task reads the n_ slots before the head it started at: the n_ after it are free.
+  if (searching_.valid() && ++stores_since_search_ > n_)
+    finishSearch();
+  ring_->times[head_] = t;
+  ring_->values[head_] = value;
+  head_ = (head_ + 1) % static_cast<int>(ring_->values.size());
   ++count_;
 }
 
@@ -122,8 +127,7 @@ void FrequencyTracker::decimate(double value, double t)
 
 void FrequencyTracker::clear()
 {
-  std::fill(ring_.begin(), ring_.end(), 0.0);
-  head_ = 0;
+  // The head stays: a search task under way may still read the slots behind it.
   count_ = 0;
   std::fill(moving_.begin(), moving_.end(), 0.0);
   moving_head_ = 0;
@@ -142,20 +146,35 @@ int FrequencyTracker::samples() const
   return static_cast<int>(std::min<long>(count_, n_)) * decimation_;
 }
 
+void FrequencyTracker::finishSearch()
+{
+  if (searching_.valid())
+    searching_.wait();
+  searching_ = {};
+}
+
 FrequencyEstimate FrequencyTracker::analyse(double f_min, double f_max, double min_peak_ratio, int recent_samples)
 {
+  finishSearch();
+  return analyseHeld(held(), shape(), plan(), f_min, f_max, min_peak_ratio, recent_samples);
+}
+
+FrequencyEstimate FrequencyTracker::analyseHeld(const Held& held, const Shape& shape, Plan& planned, double f_min,
+                                                double f_max, double min_peak_ratio, int recent_samples)
+{
   FrequencyEstimate estimate;
-  int available = static_cast<int>(std::min<long>(count_, n_));
+  const int n = held.length;
+  int available = static_cast<int>(std::min<long>(held.count, held.window));
   if (recent_samples > 0)
-    available = std::min(available, recent_samples / decimation_);
+    available = std::min(available, recent_samples / shape.decimation);
   if (available < 16)
     return estimate;
 
   // The newest `available` samples, oldest first: at most two contiguous pieces of the ring
   // (no index arithmetic per sample).
-  const int first = (head_ - available + n_) % n_;
-  const int first_length = std::min(available, n_ - first);
-  const double* pieces[2] = { ring_.data() + first, ring_.data() };
+  const int first = (held.head - available + n) % n;
+  const int first_length = std::min(available, n - first);
+  const double* pieces[2] = { held.values + first, held.values };
   const int lengths[2] = { first_length, available - first_length };
 
   // Mean removed, Hann-windowed, zero-padded to the FFT size.
@@ -174,7 +193,6 @@ FrequencyEstimate FrequencyTracker::analyse(double f_min, double f_max, double m
   // A (numerically) constant signal has no period, whatever its rounding noise looks like.
   if (variance / available <= 1e-18 * (1.0 + mean * mean))
     return estimate;
-  Plan& planned = plan();
   if (planned.window_length != available)
   {
     // cos(2 pi (i + 1/2) / N) by rotation: the window is rebuilt at every hop while the ring
@@ -204,13 +222,13 @@ FrequencyEstimate FrequencyTracker::analyse(double f_min, double f_max, double m
     in += lengths[p];
     window += lengths[p];
   }
-  std::fill(planned.fft.in + available, planned.fft.in + fft_size_, 0.0);
+  std::fill(planned.fft.in + available, planned.fft.in + shape.fft_size, 0.0);
   planned.fft.execute();
 
-  const double elapsed = times_[(head_ - 1 + n_) % n_] - times_[(head_ - available + n_) % n_];
-  const double rate = elapsed > 0.0 ? (available - 1) / elapsed : rate_;
-  const int bins = fft_size_ / 2 + 1;
-  const double df = rate / fft_size_;
+  const double elapsed = held.times[(held.head - 1 + n) % n] - held.times[first];
+  const double rate = elapsed > 0.0 ? (available - 1) / elapsed : shape.rate;
+  const int bins = shape.fft_size / 2 + 1;
+  const double df = rate / shape.fft_size;
 
   // Search band: never DC (bin 0) nor Nyquist, and a period must fit 3 times in the data.
   const double span = available / rate;
@@ -259,19 +277,54 @@ FrequencyEstimate FrequencyTracker::analyse(double f_min, double f_max, double m
 FrequencyEstimate FrequencyTracker::analyseFreshest(double f_min, double f_max, double min_peak_ratio,
                                                     int recent_samples, int* span_samples)
 {
-  FrequencyEstimate estimate = analyse(f_min, f_max, min_peak_ratio);
-  *span_samples = samples();
-  const double recent_span = static_cast<double>(recent_samples) / sampleRate();
-  if (estimate.locked && samples() > recent_samples && estimate.frequency >= 3.0 / recent_span)
+  finishSearch();
+  const FrequencySearch found = searchHeld(held(), shape(), plan(), f_min, f_max, min_peak_ratio, recent_samples, true);
+  *span_samples = found.span_samples;
+  return found.estimate;
+}
+
+FrequencySearch FrequencyTracker::searchHeld(const Held& held, const Shape& shape, Plan& planned, double f_min,
+                                             double f_max, double min_peak_ratio, int recent_samples, bool freshest)
+{
+  FrequencySearch found;
+  found.samples = static_cast<int>(std::min<long>(held.count, held.window)) * shape.decimation;
+  found.full = held.count >= held.window;
+  if (!freshest)
   {
-    const FrequencyEstimate fresh = analyse(f_min, f_max, min_peak_ratio, recent_samples);
-    if (fresh.locked && std::abs(fresh.frequency - estimate.frequency) <= 0.2 * estimate.frequency)
+    found.estimate = analyseHeld(held, shape, planned, f_min, f_max, min_peak_ratio, recent_samples);
+    found.span_samples = std::min(found.samples, recent_samples);
+    return found;
+  }
+  found.estimate = analyseHeld(held, shape, planned, f_min, f_max, min_peak_ratio, 0);
+  found.span_samples = found.samples;
+  const double recent_span = static_cast<double>(recent_samples) / (shape.rate * shape.decimation);
+  if (found.estimate.locked && found.samples > recent_samples && found.estimate.frequency >= 3.0 / recent_span)
+  {
+    const FrequencyEstimate fresh = analyseHeld(held, shape, planned, f_min, f_max, min_peak_ratio, recent_samples);
+    if (fresh.locked && std::abs(fresh.frequency - found.estimate.frequency) <= 0.2 * found.estimate.frequency)
     {
-      estimate = fresh;
-      *span_samples = recent_samples / decimation_ * decimation_;
+      found.estimate = fresh;
+      found.span_samples = recent_samples / shape.decimation * shape.decimation;
     }
   }
-  return estimate;
+  return found;
+}
+
+std::function<FrequencySearch()> FrequencyTracker::searchTask(double f_min, double f_max, double min_peak_ratio,
+                                                              int recent_samples, bool freshest)
+{
+  finishSearch();  // the transform is the tracker's: one search at a time
+  plan();
+  auto done = std::make_shared<std::promise<void>>();
+  searching_ = done->get_future().share();
+  stores_since_search_ = 0;
+  return [ring = ring_, plan = plan_, done, held = held(), shape = shape(), f_min, f_max, min_peak_ratio,
+          recent_samples, freshest] {
+    const FrequencySearch found =
+        searchHeld(held, shape, *plan, f_min, f_max, min_peak_ratio, recent_samples, freshest);
+    done->set_value();
+    return found;
+  };
 }
 
 }  // namespace periodic_bias_compensation

@@ -331,10 +331,11 @@ TEST(Compensator, TheLeverArmSeesTheCalibrationWindowOnce)
   }
 }
 
-// The calibration window's period search runs on the core's design thread and is taken up a set
-// time of data later: the outputs are those of the search made in the sample's call, and a
-// reset or recalibration while it runs starts a window of its own that ends as any other.
-TEST(Compensator, TheWindowsPeriodSearchTakenUpLaterChangesNoOutput)
+// The period searches (the calibration window's, then every fft_hop's) run on the core's design
+// thread and are taken up a set time of data later: the outputs are those of the searches made in
+// the sample's call, and a reset or recalibration while the window's runs starts a window of its
+// own that ends as any other.
+TEST(Compensator, PeriodSearchesTakenUpLaterChangeNoOutput)
 {
   const CompensatorConfig config = modeConfig(Mode::kDefault);
   const Vector3 bias(0.02, -0.01, 0.03);

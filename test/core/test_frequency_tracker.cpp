@@ -1,11 +1,16 @@
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cmath>
+#include <future>
 #include <random>
+#include <thread>
+#include <vector>
 
 #include "periodic_bias_compensation/core/frequency_tracker.h"
 
 using periodic_bias_compensation::FrequencyEstimate;
+using periodic_bias_compensation::FrequencySearch;
 using periodic_bias_compensation::FrequencyTracker;
 
 namespace
@@ -163,4 +168,62 @@ TEST(FrequencyTracker, FreshestSpanFindsASwellAndFollowsADrift)
   EXPECT_EQ(span, static_cast<int>(30.0 * rate));
   EXPECT_NEAR(e.frequency, 0.455, 0.004);
   EXPECT_NEAR(tracker.analyse(0.05, 2.0, 30.0).frequency, 0.44, 0.004);
+}
+
+// A search task run on another thread reads the window as it stood when the task was made: a
+// clear() and samples pushed while it may still run change nothing of its result, which is that
+// of the same search run at once, bit for bit.
+TEST(FrequencyTracker, SearchElsewhereIsTheWindowAsItStood)
+{
+  const double rate = 100.0;
+  FrequencyTracker background(static_cast<int>(60.0 * rate), rate, 10, true);
+  FrequencyTracker calling(static_cast<int>(60.0 * rate), rate, 10, false);
+  std::mt19937 rng(3);
+  std::normal_distribution<double> noise(0.0, 0.05);
+  const int recent = static_cast<int>(30.0 * rate);
+  std::vector<double> history;
+  int searches = 0, locked = 0, fresher = 0;
+  double phase = 0.0;
+  for (int k = 0; k < 150 * rate; ++k)
+  {
+    // A line drifting from 0.10 to 0.25 Hz: the newest 30 s differ from the whole window.
+    phase += 2 * M_PI * (0.10 + 0.001 * k / rate) / rate;
+    history.push_back(std::sin(phase) + noise(rng));
+    background.push(history.back(), k / rate);
+    calling.push(history.back(), k / rate);
+    if (k % 100 != 99)
+      continue;
+    // The newest 30 s or the whole window (60 s), as analyseFreshest() takes them; each alone.
+    for (const auto& [freshest, span] : { std::pair{ true, recent }, { false, recent }, { false, 2 * recent } })
+    {
+      auto task = background.searchTask(0.05, 2.0, 10.0, span, freshest);
+      std::future<FrequencySearch> elsewhere = std::async(std::launch::async, [&task] {
+        std::this_thread::sleep_for(std::chrono::milliseconds(1));
+        return task();
+      });
+      const FrequencySearch here = calling.searchTask(0.05, 2.0, 10.0, span, freshest)();
+      // Meanwhile: a clear() and more than a window of samples (7000 in, 700 decimated), the last
+      // of which wait for it.
+      background.clear();
+      for (int j = 0; j < 7000; ++j)
+        background.push(5.0 * noise(rng), (k + 1 + j) / rate);
+      const FrequencySearch there = elsewhere.get();
+      ASSERT_EQ(there.estimate.locked, here.estimate.locked) << k;
+      ASSERT_EQ(there.estimate.frequency, here.estimate.frequency) << k;
+      ASSERT_EQ(there.estimate.amplitude, here.estimate.amplitude) << k;
+      ASSERT_EQ(there.span_samples, here.span_samples) << k;
+      ASSERT_EQ(there.samples, here.samples) << k;
+      ASSERT_EQ(there.full, here.full) << k;
+      ++searches;
+      locked += here.estimate.locked;
+      fresher += freshest && here.span_samples == recent;
+      // Back to the window `calling` holds.
+      background.clear();
+      for (std::size_t i = 0; i < history.size(); ++i)
+        background.push(history[i], i / rate);
+    }
+  }
+  EXPECT_EQ(searches, 450);
+  EXPECT_GT(locked, 300);
+  EXPECT_GT(fresher, 50);
 }

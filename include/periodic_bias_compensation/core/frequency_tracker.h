@@ -1,6 +1,7 @@
 // Dominant-frequency estimation with FFTW3 over a sliding window (estimation core, no ROS).
 #pragma once
 
+#include <functional>
 #include <future>
 #include <memory>
 #include <vector>
@@ -14,6 +15,15 @@ struct FrequencyEstimate
   double frequency = 0.0;   ///< dominant frequency with sub-bin interpolation [Hz]
   double peak_ratio = 0.0;  ///< peak power / median power in the band [-]
   double amplitude = 0.0;   ///< amplitude of the dominant sinusoid after the decimation filter [signal units]
+};
+
+/// A search of the window as it stood when FrequencyTracker::search() was called.
+struct FrequencySearch
+{
+  FrequencyEstimate estimate;
+  int span_samples = 0;  ///< input samples the estimate covers
+  int samples = 0;       ///< FrequencyTracker::samples() when searched
+  bool full = false;     ///< FrequencyTracker::full() when searched
 };
 
 /// Sliding-window FFT of one signal. The FFTW plan is made once per window size and reused. With
@@ -74,9 +84,53 @@ public:
   /// followed with less lag. *span_samples: the input samples the returned estimate covers.
   FrequencyEstimate analyseFreshest(double f_min, double f_max, double min_peak_ratio, int recent_samples,
                                     int* span_samples);
+  /// analyseFreshest() (`freshest`) or analyse() of the newest recent_samples, of the window as it
+  /// stands now, as a task to run on any thread while new samples come (the core's design thread):
+  /// it reads the window in place, and the slots it reads are not written again until it has
+  /// finished (the ring holds two windows; push() waits for it, should a window's worth of new
+  /// samples come first). Its result is that of the same search made now. Run it once; the next
+  /// search, analyse() and clear() wait for it to finish.
+  std::function<FrequencySearch()> searchTask(double f_min, double f_max, double min_peak_ratio, int recent_samples,
+                                              bool freshest);
 
 private:
   struct Plan;
+  /// The ring of samples and their times (shared with a search task under way).
+  struct Ring
+  {
+    std::vector<double> values;
+    std::vector<double> times;
+  };
+  /// A window of the ring: its `window` newest of `count` samples pushed, the next write at `head`.
+  struct Held
+  {
+    const double* values;
+    const double* times;
+    int length;  ///< of the ring
+    int window;  ///< of the search [samples at the decimated rate]
+    int head;
+    long count;
+  };
+  /// What a search needs of the tracker besides its window (fixed at construction).
+  struct Shape
+  {
+    int fft_size;
+    double rate;  ///< decimated rate [Hz]
+    int decimation;
+  };
+  static FrequencyEstimate analyseHeld(const Held& held, const Shape& shape, Plan& plan, double f_min, double f_max,
+                                       double min_peak_ratio, int recent_samples);
+  static FrequencySearch searchHeld(const Held& held, const Shape& shape, Plan& plan, double f_min, double f_max,
+                                    double min_peak_ratio, int recent_samples, bool freshest);
+  Held held() const
+  {
+    return { ring_->values.data(), ring_->times.data(), static_cast<int>(ring_->values.size()), n_, head_, count_ };
+  }
+  Shape shape() const
+  {
+    return { fft_size_, rate_, decimation_ };
+  }
+  void finishSearch();                    ///< waits for a search task under way
   Plan& plan();                           ///< plan_, once planned
   void store(double value, double t);     ///< into the window (decimated rate)
   void decimate(double value, double t);  ///< through the anti-alias filter
@@ -94,13 +148,14 @@ private:
   double block_time_ = 0.0;  ///< sum of the block's input times
   int block_count_ = 0;
   long inputs_ = 0;
-  double last_time_ = 0.0;  ///< time of the newest input [s]
-  std::vector<double> ring_;
-  std::vector<double> times_;
+  double last_time_ = 0.0;      ///< time of the newest input [s]
+  std::shared_ptr<Ring> ring_;  ///< 2 n_ slots (searchTask)
   int head_ = 0;
   long count_ = 0;
-  std::unique_ptr<Plan> plan_;
+  std::shared_ptr<Plan> plan_;                   ///< shared with a search task under way
   std::future<std::unique_ptr<Plan>> planning_;  ///< plan_ until it is taken
+  std::shared_future<void> searching_;           ///< the last search task, until it has finished
+  int stores_since_search_ = 0;                  ///< stored since the last search task was made
 };
 
 }  // namespace periodic_bias_compensation
