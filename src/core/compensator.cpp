@@ -41,11 +41,6 @@ constexpr double kDecimatedRateFactor = 5.0;
 /// replayed over the next calibration_duration / (kReplayPerSample - 1) instead of within one
 /// sample's call, its outputs held until it has caught up.
 constexpr std::size_t kReplayPerSample = 64;
-/// From a period search's last sample to taking up its result, the search running on the core's
-/// design thread meanwhile [s of data]: the calibration window's (milliseconds over 10 s at 1 kHz
-/// and more) and each fft_hop's (tens of microseconds, on memory the sample's call would
-/// otherwise have to fetch after sleeping between samples).
-constexpr double kSearchDelay = 0.2;
 
 bool isFinite(const Vector3& v)
 {

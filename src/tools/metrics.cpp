@@ -66,6 +66,7 @@ PeriodScorer::PeriodScorer(const CompensatorConfig& config, double rate) : confi
   for (auto& tracker : truth_)
     tracker = std::make_unique<FrequencyTracker>(window, rate);
   hop_ = std::max(1, static_cast<int>(std::lround(config.fft_hop * rate)));
+  delay_ = std::clamp(static_cast<int>(std::lround(kSearchDelay * rate)), 1, hop_);
   rate_ = rate;
 }
 
@@ -77,23 +78,34 @@ void PeriodScorer::add(const sim::Sample& s, const CompensatorOutput& out)
     if (out.axes[i].locked && std::isnan(errors_.lock_time[i]))
       errors_.lock_time[i] = s.elapsed;
   }
-  if (++since_hop_ < hop_)
+  ++since_hop_;
+  if (since_hop_ == delay_ && due_)
+  {
+    due_ = false;
+    for (int i = 0; i < 3; ++i)
+    {
+      if (std::isnan(errors_.lock_time[i]))
+        continue;
+      ++hops_[i];
+      if (!out.axes[i].locked)
+        continue;
+      ++locked_[i];
+      if (at_hop_[i] > 0.0)
+        relative_[i].push_back(100.0 * std::abs(out.axes[i].frequency - at_hop_[i]) / at_hop_[i]);
+    }
+  }
+  if (since_hop_ < hop_)
     return;
   since_hop_ = 0;
+  due_ = true;
   for (int i = 0; i < 3; ++i)
   {
-    if (std::isnan(errors_.lock_time[i]))
-      continue;
-    ++hops_[i];
-    if (!out.axes[i].locked)
-      continue;
-    ++locked_[i];
-    // Over the same span the compensator used (analyseFreshest, same rule).
+    // Over the same span the compensator's search uses (analyseFreshest, same rule).
     int span = 0;
-    const FrequencyEstimate truth = truth_[i]->analyseFreshest(config_.min_frequency, config_.max_frequency, 1.0,
-                                                               static_cast<int>(kRecentFftWindow * rate_), &span);
-    if (truth.frequency > 0.0)
-      relative_[i].push_back(100.0 * std::abs(out.axes[i].frequency - truth.frequency) / truth.frequency);
+    at_hop_[i] = truth_[i]
+                     ->analyseFreshest(config_.min_frequency, config_.max_frequency, 1.0,
+                                       static_cast<int>(kRecentFftWindow * rate_), &span)
+                     .frequency;
   }
 }
 

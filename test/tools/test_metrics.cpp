@@ -271,7 +271,8 @@ TEST(Metrics, PeriodScorerOnASinusoidOfKnownPeriod)
   EXPECT_EQ(errors.lock_time.x(), 100.0);
   EXPECT_EQ(errors.lock_time.y(), 50.0);
   EXPECT_TRUE(std::isnan(errors.lock_time.z()));
-  // Hops end at samples 9, 19, ...: 350 of them from 50.9 s to 399.9 s, 100 in 200..300 s.
+  // Hops end at samples 9, 19, ... and are scored kSearchDelay (2 samples) later, where the
+  // compensator takes them up: 350 of them from 50.1 s to 399.1 s, 100 in 200..300 s.
   EXPECT_DOUBLE_EQ(errors.locked_percent.x(), 100.0);
   EXPECT_DOUBLE_EQ(errors.locked_percent.y(), 100.0 * 250 / 350);
   EXPECT_TRUE(std::isnan(errors.locked_percent.z()));

@@ -38,6 +38,11 @@ constexpr int kMinPaperPeriod = 6;
 /// Newest part of the FFT window analysed again for a period that fits three times in it
 /// (FrequencyTracker::analyseFreshest) [s].
 constexpr double kRecentFftWindow = 30.0;
+/// From a period search's last sample to taking up its result, the search running on the core's
+/// design thread meanwhile [s of data]: the calibration window's (milliseconds over 10 s at 1 kHz
+/// and more) and each fft_hop's (at most one hop; tens of microseconds, on memory the sample's
+/// call would otherwise have to fetch after sleeping between samples).
+constexpr double kSearchDelay = 0.2;
 
 /// How the periodic drift terms d_v, d_p are computed.
 enum class Mode

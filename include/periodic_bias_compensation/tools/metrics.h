@@ -86,10 +86,11 @@ struct PeriodErrors
 };
 
 /// The compensator's period tracking over one run. From an axis's first lock on, every FFT hop
-/// (fft_hop, counted in samples from the first sample) counts as locked or not; at a locked hop the
-/// compensator's frequency f is compared with f_true, the dominant frequency a FrequencyTracker
-/// with the compensator's window and band finds in the true wave acceleration over the span the
-/// compensator uses (analyseFreshest over kRecentFftWindow).
+/// (fft_hop, counted in samples from the first sample) counts as locked or not where the
+/// compensator takes up that hop's search (kSearchDelay later); at a locked one the compensator's
+/// frequency f is compared with f_true, the dominant frequency a FrequencyTracker with the
+/// compensator's window and band finds in the true wave acceleration over the span the
+/// compensator's search saw (analyseFreshest over kRecentFftWindow, at the hop).
 class PeriodScorer
 {
 public:
@@ -104,6 +105,9 @@ private:
   CompensatorConfig config_;
   std::array<std::unique_ptr<FrequencyTracker>, 3> truth_;
   int hop_ = 1, since_hop_ = 0;
+  int delay_ = 1;                   ///< kSearchDelay in samples, 1..hop_
+  std::array<double, 3> at_hop_{};  ///< f_true at the last hop (0: none found)
+  bool due_ = false;                ///< the last hop's comparison is still to come
   double rate_ = 0.0;
   std::array<int, 3> hops_{}, locked_{};
   std::array<std::vector<double>, 3> relative_;
