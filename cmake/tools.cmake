@@ -32,6 +32,9 @@ target_link_libraries(nodelet_benchmark ${PROJECT_NAME}_sim_ros ${PROJECT_NAME}_
 add_dependencies(nodelet_benchmark ${PROJECT_NAME}_nodelet compensator_node)
 add_executable(bag_read_floor EXCLUDE_FROM_ALL test/bench/bag_read_floor.cpp)
 target_link_libraries(bag_read_floor ${catkin_LIBRARIES})
+# The machine's own floor under the nodelet's latencies: thread wake-ups, timers, a spinning thread.
+add_executable(wakeup_floor EXCLUDE_FROM_ALL test/bench/wakeup_floor.cpp)
+target_link_libraries(wakeup_floor ${PROJECT_NAME}_ros)
 
 if(CATKIN_ENABLE_TESTING)
   # The renderer of docs/benchmarks.md (test/bench/bench_render.py) on a small JSON fixture: a

@@ -49,7 +49,7 @@ TEMPLATE = os.path.join(REPO, 'docs', 'bench', 'benchmarks.md.in')
 # The CPU the real-time side-by-side runs are pinned to (the machines measured have two).
 REALTIME_CPU = 1
 TARGETS = ('core_benchmark', 'core_latency', 'evaluate_compensator', 'nodelet_benchmark', 'bag_read_floor', 'simulate_imu',
-           'compensate_bag', 'test_core')
+           'compensate_bag', 'test_core', 'wakeup_floor')
 PY = '/usr/bin/python3'  # Debian's ROS modules live there, not in another python on PATH
 
 
@@ -225,6 +225,7 @@ class Bench:
                 if run['fields']['dropped'] == '0':
                     break
         runs += self.nodelet_side_by_side()
+        runs += self.wakeup_floor()
         return {'seed': self.ros_seed, 'paced_s': self.paced_s, 'max_data_s': self.max_data_s, 'runs': runs}
 
     def madgwick_env(self):
@@ -262,6 +263,21 @@ class Bench:
             if madgwick:
                 runs.append(self.nodelet_run(label, 'intra', '--rate', rate, '--duration', seconds,
                                              '--nodelet', 'madgwick', env=madgwick, group='side-by-side'))
+        return runs
+
+    def wakeup_floor(self):
+        """The machine's own floor under the side-by-side latencies (wakeup_floor: a timed thread
+        waking another, no ROS), paced as those, ordinary and real-time on the same CPU; after the
+        real-time 1 kHz run, a thread that never sleeps on that CPU."""
+        log('wakeup floor: 100 Hz, 1 kHz, ordinary and real-time; a spinning thread')
+        runs = []
+        for label, rate, seconds in (('100 Hz', 100, self.paced_s[0]), ('1 kHz', 1000, self.paced_s[1])):
+            realtime = ['--realtime-priority', 50, '--cpu', REALTIME_CPU] + (['--spin'] if rate == 1000 else [])
+            for extra in ([], realtime):
+                r = self.output([self.exe('wakeup_floor'), '--rate', str(rate), '--duration', str(seconds)]
+                                + [str(x) for x in extra], check=True)
+                runs += [{'label': label, 'group': 'floor', 'fields': fields(line)}
+                         for line in r.stdout.split('\n') if line.startswith('floor=')]
         return runs
 
     def bag(self, seconds):

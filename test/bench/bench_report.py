@@ -117,6 +117,26 @@ def nodelet_markdown(runs):
             print()
             print('Madgwick not measured in this run (no built imu_tools given: `--imu-tools DEVEL`).')
         print()
+    floor = [(r['label'], r['fields']) for r in runs if r.get('group') == 'floor']
+    if floor:
+        print('The machine\'s own floor in the same run (`wakeup_floor`: no ROS, no estimator, paced as the '
+              'rows above): `handoff`, a thread that sleeps to each sample time wakes a second one waiting on a '
+              'condition variable, from the notify to the second running (one hop of a sample: a nodelet\'s '
+              'answer takes two); `timer`, how late the first wakes from its sleep; `spin`, a thread that never '
+              'sleeps (ordinary priority, the real-time rows\' CPU, as long as the 1 kHz runs): the times '
+              'between two of its clock reads over 10 us, when its CPU was taken from it. No nodelet measured '
+              'here can have a maximum below the longest of these.')
+        print()
+        print('| measurement | input | threads | samples | p50 [us] | p99 [us] | max [us] | over 1 ms |')
+        print('|---|---|---|---|---|---|---|---|')
+        for label, f in floor:
+            threads = ('SCHED_FIFO %s, CPU %s' % (f['realtime_priority'], f['cpu'])
+                       if int(f['realtime_priority']) > 0 and f['floor'] != 'spin' else
+                       'ordinary' + (', CPU %s' % f['cpu'] if int(f['cpu']) >= 0 else ''))
+            print('| %s | %s | %s | %s | %.0f | %.0f | %.0f | %s |' % (
+                f['floor'], '-' if f['floor'] == 'spin' else label, threads, f['samples'], float(f['p50_us']),
+                float(f['p99_us']), float(f['max_us']), f['over_1ms']))
+        print()
     return '\n'.join(out)
 
 

@@ -124,6 +124,26 @@ class RenderTest(unittest.TestCase):
         self.assertIn('Madgwick not measured', render(dict(results, sections=dict(
             results['sections'], nodelet=dict(results['sections']['nodelet'], runs=runs[:-1])))))
 
+    def test_wakeup_floor_rows(self):
+        results = copy.deepcopy(FIXTURE)
+        runs = results['sections']['nodelet']['runs']
+        without = render(results)
+        self.assertNotIn("The machine's own floor", without)
+        floor = dict(rate='1000', samples='20000', p50_us='12.3', p99_us='45.6', max_us='7890.1', over_200us='9',
+                     over_1ms='4', realtime_priority='50', cpu='1')
+        runs += [{'label': '1 kHz', 'group': 'floor', 'fields': dict(floor, floor='handoff')},
+                 {'label': '1 kHz', 'group': 'floor', 'fields': dict(floor, floor='spin', samples='17')},
+                 {'label': '100 Hz', 'group': 'floor',
+                  'fields': dict(floor, floor='timer', realtime_priority='0', cpu='-1', rate='100')}]
+        md = render(results)
+        self.assertIn("The machine's own floor in the same run", md)
+        self.assertIn('| handoff | 1 kHz | SCHED_FIFO 50, CPU 1 | 20000 | 12 | 46 | 7890 | 4 |', md)
+        # The spinning thread is never real-time, and paced by nothing.
+        self.assertIn('| spin | - | ordinary, CPU 1 | 17 | 12 | 46 | 7890 | 4 |', md)
+        self.assertIn('| timer | 100 Hz | ordinary | 20000 | 12 | 46 | 7890 | 4 |', md)
+        # The floor stays out of the other tables.
+        self.assertTrue(without.startswith(md.split("The machine's own floor")[0]))
+
     def test_ros_side_figures(self):
         nodelet = self.sections['nodelet']
         for run in nodelet['runs']:
