@@ -40,7 +40,7 @@ constexpr double kDecimatedRateFactor = 5.0;
 /// Samples processed again per new sample after the calibration window ends: the window is
 /// replayed over the next calibration_duration / (kReplayPerSample - 1) instead of within one
 /// sample's call, its outputs held until it has caught up.
-constexpr std::size_t kReplayPerSample = 64;
+constexpr std::size_t kReplayPerSample = 16;
 
 bool isFinite(const Vector3& v)
 {
