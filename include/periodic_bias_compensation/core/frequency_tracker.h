@@ -17,7 +17,7 @@ struct FrequencyEstimate
   double amplitude = 0.0;   ///< amplitude of the dominant sinusoid after the decimation filter [signal units]
 };
 
-/// A search of the window as it stood when FrequencyTracker::search() was called.
+/// A search of the window as it stood when FrequencyTracker::searchTask() was called.
 struct FrequencySearch
 {
   FrequencyEstimate estimate;
@@ -88,8 +88,8 @@ public:
   /// stands now, as a task to run on any thread while new samples come (the core's design thread):
   /// it reads the window in place, and the slots it reads are not written again until it has
   /// finished (the ring holds two windows; push() waits for it, should a window's worth of new
-  /// samples come first). Its result is that of the same search made now. Run it once; the next
-  /// search, analyse() and clear() wait for it to finish.
+  /// samples come first; clear() keeps them). Its result is that of the same search made now. Run
+  /// it once; the next searchTask(), analyse() and analyseFreshest() wait for it to finish.
   std::function<FrequencySearch()> searchTask(double f_min, double f_max, double min_peak_ratio, int recent_samples,
                                               bool freshest);
 
