@@ -122,7 +122,8 @@ def nodelet_markdown(runs):
         print('The machine\'s own floor in the same run (`wakeup_floor`: no ROS, no estimator, paced as the '
               'rows above): `handoff`, a thread that sleeps to each sample time wakes a second one waiting on a '
               'condition variable, from the notify to the second running (one hop of a sample: a nodelet\'s '
-              'answer takes two); `timer`, how late the first wakes from its sleep; `spin`, a thread that never '
+              'answer takes two; notifies that come before the second has run count once, from the first, '
+              'hence fewer samples); `timer`, how late the first wakes from its sleep; `spin`, a thread that never '
               'sleeps (ordinary priority, the real-time rows\' CPU, as long as the 1 kHz runs): the times '
               'between two of its clock reads over 10 us, when its CPU was taken from it. No nodelet measured '
               'here can have a maximum below the longest of these.')

@@ -8,7 +8,8 @@
 // second thread that waits on a condition variable, as the harness's publisher wakes a nodelet's
 // thread and that thread the harness's receiver. Measured over S seconds:
 //  - `handoff`: from the notify to the woken thread running: one hop of a sample (a nodelet's
-//    answer takes two);
+//    answer takes two); notifies that come while the waiter has not yet run count once, from the
+//    first;
 //  - `timer`: how late the ticking thread wakes from each sleep.
 // With --spin, then, for S seconds more: a thread that never sleeps reads the steady clock; `spin`
 // is the time between two consecutive reads (over 10 us: the thread's CPU taken from it, by the
@@ -133,9 +134,11 @@ void tickAndHandOff(const Options& o)
     const Clock::time_point woke = Clock::now();
     late.push_back(microseconds(woke - due));
     {
+      // From the oldest notify the waiter has not taken: one it misses until the next is not lost.
       std::lock_guard<std::mutex> lock(mutex);
+      if (taken == posted)
+        notified = Clock::now();
       ++posted;
-      notified = Clock::now();
     }
     wake.notify_one();
   }
