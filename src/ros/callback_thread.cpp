@@ -70,6 +70,20 @@ bool setRealtimePriority(pthread_t thread, int priority, std::string* why)
   return true;
 }
 
+bool pinToCpu(int cpu, std::string* why)
+{
+  cpu_set_t cpus;
+  CPU_ZERO(&cpus);
+  if (cpu >= 0 && cpu < CPU_SETSIZE)
+    CPU_SET(cpu, &cpus);
+  if (sched_setaffinity(0, sizeof(cpus), &cpus) != 0)
+  {
+    *why = "CPU " + std::to_string(cpu) + ": " + std::strerror(errno);
+    return false;
+  }
+  return true;
+}
+
 void CallbackThread::post(std::function<void()> work)
 {
   queue_.addCallback(boost::make_shared<FunctionCallback>(std::move(work)));

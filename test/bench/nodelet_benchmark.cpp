@@ -586,15 +586,10 @@ int main(int argc, char** argv)
     if (!parsed)
       return 0;
     options = *parsed;
-    if (options.cpu >= 0)
-    {
-      // Before any thread starts: every thread inherits it.
-      cpu_set_t cpus;
-      CPU_ZERO(&cpus);
-      CPU_SET(static_cast<int>(options.cpu), &cpus);
-      if (sched_setaffinity(0, sizeof(cpus), &cpus) != 0)
-        throw pbc::UsageError("--cpu " + std::to_string(options.cpu) + ": " + std::strerror(errno));
-    }
+    // Before any thread starts: every thread inherits it.
+    std::string pinned;
+    if (options.cpu >= 0 && !pbc::pinToCpu(static_cast<int>(options.cpu), &pinned))
+      throw pbc::UsageError("--cpu: " + pinned);
     if (options.realtime_priority > 0)
     {
       // Refused here, before anything is loaded, rather than in a nodelet's onInit().

@@ -185,14 +185,9 @@ int main(int argc, char** argv)
     if (!parsed)
       return 0;
     options = *parsed;
-    if (options.cpu >= 0)
-    {
-      cpu_set_t cpus;
-      CPU_ZERO(&cpus);
-      CPU_SET(static_cast<int>(options.cpu), &cpus);
-      if (sched_setaffinity(0, sizeof(cpus), &cpus) != 0)
-        throw pbc::UsageError("--cpu " + std::to_string(options.cpu) + ": " + std::strerror(errno));
-    }
+    std::string pinned;
+    if (options.cpu >= 0 && !pbc::pinToCpu(static_cast<int>(options.cpu), &pinned))
+      throw pbc::UsageError("--cpu: " + pinned);
     std::string why;
     if (options.realtime_priority > 0 &&
         !pbc::setRealtimePriority(pthread_self(), static_cast<int>(options.realtime_priority), &why))

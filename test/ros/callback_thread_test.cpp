@@ -143,3 +143,38 @@ int main(int argc, char** argv)
   testing::InitGoogleTest(&argc, argv);
   return RUN_ALL_TESTS();
 }
+
+// pinToCpu: the calling thread and those it starts run on that CPU alone; a CPU the machine does
+// not have is refused with the reason, the thread's CPUs unchanged.
+TEST(CallbackThread, PinToCpuHoldsTheCallerAndItsThreads)
+{
+  std::thread([] {
+    cpu_set_t before;
+    ASSERT_EQ(sched_getaffinity(0, sizeof(before), &before), 0);
+    std::string why;
+    EXPECT_FALSE(periodic_bias_compensation::pinToCpu(CPU_SETSIZE + 1, &why));
+    EXPECT_NE(why.find("CPU"), std::string::npos) << why;
+    cpu_set_t unchanged;
+    ASSERT_EQ(sched_getaffinity(0, sizeof(unchanged), &unchanged), 0);
+    EXPECT_TRUE(CPU_EQUAL(&before, &unchanged));
+
+    int allowed = 0;
+    while (!CPU_ISSET(allowed, &before))
+      ++allowed;
+    ASSERT_TRUE(periodic_bias_compensation::pinToCpu(allowed, &why)) << why;
+    for (int round = 0; round < 2; ++round)
+    {
+      cpu_set_t now;
+      ASSERT_EQ(sched_getaffinity(0, sizeof(now), &now), 0);
+      EXPECT_EQ(CPU_COUNT(&now), 1);
+      EXPECT_TRUE(CPU_ISSET(allowed, &now));
+      if (round == 0)
+      {
+        // A thread started now inherits it.
+        cpu_set_t child;
+        std::thread([&child] { sched_getaffinity(0, sizeof(child), &child); }).join();
+        EXPECT_TRUE(CPU_EQUAL(&child, &now));
+      }
+    }
+  }).join();
+}

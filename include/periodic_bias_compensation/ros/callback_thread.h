@@ -21,6 +21,10 @@ namespace periodic_bias_compensation
 /// limit, limits.conf(5)); the thread then keeps its scheduling.
 bool setRealtimePriority(pthread_t thread, int priority, std::string* why);
 
+/// Runs the calling thread, and every thread it starts from now on, on CPU `cpu` alone. False
+/// with the reason in *why when the system refuses (no such CPU, or not allowed to this process).
+bool pinToCpu(int cpu, std::string* why);
+
 class CallbackThread
 {
 public:
