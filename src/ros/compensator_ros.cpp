@@ -138,9 +138,9 @@ CompensatorRos::CompensatorRos(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh
   {
     imu_thread_ = std::make_unique<CallbackThread>("pbc_imu");
     imu_options.callback_queue = imu_thread_->queue();
-    std::string why;
     if (params_.ros.imu_thread_priority > 0)
     {
+      std::string why;
       if (imu_thread_->setRealtimePriority(params_.ros.imu_thread_priority, &why))
         ROS_INFO("pbc_imu runs real-time (SCHED_FIFO, priority %d)", params_.ros.imu_thread_priority);
       else

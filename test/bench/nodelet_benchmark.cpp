@@ -159,9 +159,11 @@ private:
     {
       thread_ = std::make_unique<pbc::CallbackThread>("relay");
       options.callback_queue = thread_->queue();
-      std::string why;
       if (realtime_priority_ > 0)
+      {
+        std::string why;
         requireRealtime(thread_->setRealtimePriority(realtime_priority_, &why), why);
+      }
     }
     sub_ = nh.subscribe(options);
   }
