@@ -18,7 +18,8 @@ add_library(${PROJECT_NAME}_ros
   src/ros/bag_reader.cpp
   src/ros/compensator_ros.cpp
   src/ros/bag_writer.cpp
-  src/ros/callback_thread.cpp)
+  src/ros/callback_thread.cpp
+  src/ros/cpu_wakeup_latency.cpp)
 # roslz4 and bz2: BagWriter compresses chunks itself, the bag check decompresses them as rosbag
 # will (not exported by rosbag_storage).
 target_link_libraries(${PROJECT_NAME}_ros ${PROJECT_NAME}_parameters ${PROJECT_NAME}_core ${catkin_LIBRARIES}

@@ -48,6 +48,9 @@ OUT = os.path.join(REPO, 'docs', 'benchmarks.md')
 TEMPLATE = os.path.join(REPO, 'docs', 'bench', 'benchmarks.md.in')
 # The CPU the real-time side-by-side runs are pinned to (the machines measured have two).
 REALTIME_CPU = 1
+# Where Linux takes CPU wake-up latency requests (PM QoS): rows asking idle CPUs to poll need to
+# write it.
+WAKEUP_LATENCY_DEVICE = '/dev/cpu_dma_latency'
 TARGETS = ('core_benchmark', 'core_latency', 'evaluate_compensator', 'nodelet_benchmark', 'bag_read_floor', 'simulate_imu',
            'compensate_bag', 'test_core', 'wakeup_floor')
 PY = '/usr/bin/python3'  # Debian's ROS modules live there, not in another python on PATH
@@ -243,9 +246,13 @@ class Bench:
         """The compensator (imu/data on its own thread, then on the manager's queues), the harness's
         own relay (both also real-time on one CPU) and imu_tools' Madgwick nodelet in the same
         harness, in-process, paced at 100 Hz, 1 kHz and 2.8 kHz: latency and CPU time per message
-        (the process's, and without the harness's threads)."""
+        (the process's, and without the harness's threads); then the compensator, the relay and
+        Madgwick again with idle CPUs polling (a wake-up latency request of 0), where this user may
+        ask for it."""
         madgwick = self.madgwick_env()
-        log('nodelet side by side: 100 Hz, 1 kHz, 2.8 kHz, with the relay' + (' and Madgwick' if madgwick else ''))
+        polling = self.polling_allowed()
+        log('nodelet side by side: 100 Hz, 1 kHz, 2.8 kHz, with the relay' + (' and Madgwick' if madgwick else '')
+            + (', also with idle CPUs polling' if polling else ''))
         runs = []
         for label, rate, seconds in (('100 Hz', 100, self.paced_s[0]), ('1 kHz', 1000, self.paced_s[1]),
                                      ('2.8 kHz', 2800, self.side_fast_s)):
@@ -263,17 +270,40 @@ class Bench:
             if madgwick:
                 runs.append(self.nodelet_run(label, 'intra', '--rate', rate, '--duration', seconds,
                                              '--nodelet', 'madgwick', env=madgwick, group='side-by-side'))
+            if polling:
+                poll = ['--cpu-wakeup-latency', 0]
+                for nodelet in ('compensator', 'relay'):
+                    runs.append(self.nodelet_run(label, 'intra', '--rate', rate, '--duration', seconds,
+                                                 '--nodelet', nodelet, *poll, group='side-by-side'))
+                runs.append(self.nodelet_run(label, 'intra', '--rate', rate, '--duration', seconds, *poll,
+                                             '--realtime-priority', 50, '--cpu', REALTIME_CPU,
+                                             group='side-by-side'))
+                if madgwick:
+                    runs.append(self.nodelet_run(label, 'intra', '--rate', rate, '--duration', seconds,
+                                                 '--nodelet', 'madgwick', *poll, env=madgwick,
+                                                 group='side-by-side'))
         return runs
+
+    def polling_allowed(self):
+        """Whether this user may ask that idle CPUs poll (write the wake-up latency device); logs
+        why not otherwise."""
+        if os.access(WAKEUP_LATENCY_DEVICE, os.W_OK):
+            return True
+        log('no write access to %s: the rows with idle CPUs polling are not measured' % WAKEUP_LATENCY_DEVICE)
+        return False
 
     def wakeup_floor(self):
         """The machine's own floor under the side-by-side latencies (wakeup_floor: a timed thread
-        waking another, no ROS), paced as those, ordinary and real-time on the same CPU; after the
-        real-time 1 kHz run, a thread that never sleeps on that CPU."""
+        waking another, no ROS), paced as those, ordinary and real-time on the same CPU, then both
+        with idle CPUs polling where allowed; after the real-time 1 kHz run, a thread that never
+        sleeps on that CPU."""
         log('wakeup floor: 100 Hz, 1 kHz, ordinary and real-time; a spinning thread')
         runs = []
+        poll = [['--cpu-wakeup-latency', 0]] if self.polling_allowed() else []
         for label, rate, seconds in (('100 Hz', 100, self.paced_s[0]), ('1 kHz', 1000, self.paced_s[1])):
-            realtime = ['--realtime-priority', 50, '--cpu', REALTIME_CPU] + (['--spin'] if rate == 1000 else [])
-            for extra in ([], realtime):
+            realtime = ['--realtime-priority', 50, '--cpu', REALTIME_CPU]
+            spin = ['--spin'] if rate == 1000 else []
+            for extra in [[], realtime + spin] + [p + q for p in poll for q in ([], realtime)]:
                 r = self.output([self.exe('wakeup_floor'), '--rate', str(rate), '--duration', str(seconds)]
                                 + [str(x) for x in extra], check=True)
                 runs += [{'label': label, 'group': 'floor', 'fields': fields(line)}

@@ -130,6 +130,15 @@ CompensatorRos::CompensatorRos(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh
   reconfigure_server_ = std::make_unique<dynamic_reconfigure::Server<TuningConfig>>(mutex_, pnh_);
   reconfigure_server_->setCallback([this](TuningConfig& config, uint32_t level) { reconfigure(config, level); });
 
+  if (params_.ros.cpu_wakeup_latency >= 0.0)
+  {
+    std::string why;
+    if (cpu_wakeup_latency_.request(params_.ros.cpu_wakeup_latency, &why))
+      ROS_INFO("every CPU asked to wake within %g s while this node runs", params_.ros.cpu_wakeup_latency);
+    else
+      ROS_WARN("cpu_wakeup_latency %g s not applied, the CPUs keep their idle states: %s",
+               params_.ros.cpu_wakeup_latency, why.c_str());
+  }
   ros::SubscribeOptions imu_options;
   imu_options.init<sensor_msgs::Imu>("imu/data", kImuQueue,
                                      [this](const sensor_msgs::Imu::ConstPtr& msg) { imuCallback(msg); });

@@ -140,6 +140,12 @@ const ParameterTable<RosOptions>& rosOptionParameters()
                                 "real-time priority of the pbc_imu thread (SCHED_FIFO, 1-99): it then runs ahead of "
                                 "every ordinary thread of the machine; needs CAP_SYS_NICE or an rtprio limit "
                                 "(limits.conf), where refused a warning and ordinary scheduling; 0: ordinary"));
+    t.push_back(numberParameter("cpu_wakeup_latency", &R::cpu_wakeup_latency, start, closed(-1.0, 1.0), "s",
+                                "while the node runs, the longest any CPU of the machine may take to come out of "
+                                "idle (Linux PM QoS, /dev/cpu_dma_latency): 0 keeps idle CPUs polling, so a "
+                                "sample's threads wake at once, for the power an idle CPU saves; needs write "
+                                "access to the device (root, or a udev rule), where refused a warning; "
+                                "negative: no request"));
     return t;
   }();
   return table;

@@ -103,7 +103,10 @@ def nodelet_markdown(runs):
               'sample passes through (the harness\'s publisher and receiver, the nodelet\'s own thread: the '
               'compensator\'s `imu_thread_priority`) real-time at priority P and every thread of the process '
               'on CPU N (`nodelet_benchmark --realtime-priority P --cpu N`), as on an autopilot computer '
-              'that keeps a core for the IMU.' + _side_length(side))
+              'that keeps a core for the IMU. `idle CPUs polling`: the process holds a request that no CPU '
+              'take longer than 0 us to come out of idle (`--cpu-wakeup-latency 0`, the compensator\'s '
+              '`cpu_wakeup_latency`; Linux PM QoS): idle CPUs poll instead of halting, and a thread woken '
+              'by another starts at once.' + _side_length(side))
         print()
         print('| nodelet | input | sent | dropped | latency p50 [us] | p99 [us] | max [us] '
               '| CPU per message, process [us] | nodelet [us] |')
@@ -134,6 +137,7 @@ def nodelet_markdown(runs):
             threads = ('SCHED_FIFO %s, CPU %s' % (f['realtime_priority'], f['cpu'])
                        if int(f['realtime_priority']) > 0 and f['floor'] != 'spin' else
                        'ordinary' + (', CPU %s' % f['cpu'] if int(f['cpu']) >= 0 else ''))
+            threads += _wakeup_request(f)
             print('| %s | %s | %s | %s | %.0f | %.0f | %.0f | %s |' % (
                 f['floor'], '-' if f['floor'] == 'spin' else label, threads, f['samples'], float(f['p50_us']),
                 float(f['p99_us']), float(f['max_us']), f['over_1ms']))
@@ -146,10 +150,18 @@ def _side_name(f):
     when that is not the default."""
     name = f.get('nodelet', 'compensator')
     if f.get('queues') == 'manager':
-        return name + ", manager's queues"
+        name += ", manager's queues"
     if int(f.get('realtime_priority', '0')) > 0:
-        return name + ', SCHED_FIFO %s, CPU %s' % (f['realtime_priority'], f.get('cpu', 'any'))
-    return name
+        name += ', SCHED_FIFO %s, CPU %s' % (f['realtime_priority'], f.get('cpu', 'any'))
+    return name + _wakeup_request(f)
+
+
+def _wakeup_request(f):
+    """', idle CPUs polling' (or the wake-up latency asked for) where the run held such a request."""
+    latency = float(f.get('cpu_wakeup_latency', '-1'))
+    if latency < 0:
+        return ''
+    return ', idle CPUs polling' if latency == 0 else ', CPU wake-up within %g us' % (latency * 1e6)
 
 
 def _side_length(side):

@@ -6,7 +6,7 @@
 //                     [--closed-loop] [--stream] [--rss-csv FILE] [--rss-every N]
 //                     [--latency-csv FILE]
 //                     [--nodelet compensator|madgwick|relay] [--manager-queues]
-//                     [--realtime-priority P] [--cpu N]
+//                     [--realtime-priority P] [--cpu N] [--cpu-wakeup-latency S]
 //
 // This program is the nodelet manager: a nodelet::Loader holding BenchSource (below) and, for
 // `intra`, the compensator nodelet loaded through pluginlib as `nodelet load` would. BenchSource
@@ -35,6 +35,10 @@
 // or Madgwick's nodelet). Refused (no CAP_SYS_NICE): an error, nothing measured. --cpu N runs
 // every thread of the process on CPU N (with --realtime-priority: a thread woken by another is
 // woken on its CPU, not on an idle one that has to come out of its idle state first).
+// --cpu-wakeup-latency S holds a request that no CPU take longer than S seconds to come out of idle
+// for the whole run (the compensator's ~cpu_wakeup_latency, asked by the harness for whichever
+// nodelet is measured; 0: idle CPUs poll). Refused (no write access to /dev/cpu_dma_latency): an
+// error, nothing measured.
 // Output: one line of key=value pairs on stdout.
 #include <algorithm>
 #include <array>
@@ -70,6 +74,7 @@
 
 #include "periodic_bias_compensation/ros/callback_thread.h"
 #include "periodic_bias_compensation/ros/compensator_ros.h"
+#include "periodic_bias_compensation/ros/cpu_wakeup_latency.h"
 #include "periodic_bias_compensation/ros/sim_messages.h"
 #include "periodic_bias_compensation/sim/simulator.h"
 #include "periodic_bias_compensation/tools/command_line.h"
@@ -100,6 +105,7 @@ struct Options
   bool manager_queues = false;          ///< the measured nodelet's imu/data on the manager's queues
   std::int64_t realtime_priority = 0;   ///< SCHED_FIFO priority of the sample's threads; 0: ordinary
   std::int64_t cpu = -1;                ///< the one CPU of every thread; -1: any
+  double cpu_wakeup_latency = -1.0;     ///< [s] asked of every CPU for the run; < 0: no request
 };
 
 /// Ends the process where a thread was not made real-time (`granted` false, `why` from
@@ -356,7 +362,8 @@ public:
               << " nodelet_cpu_us_per_msg=" << (process_cpu - harness_cpu) / messages * 1e6
               << " rss_kb=" << rssKilobytes() << " nodelet=" << options_.nodelet
               << " queues=" << (options_.manager_queues || options_.nodelet == "madgwick" ? "manager" : "own")
-              << " realtime_priority=" << options_.realtime_priority << " cpu=" << options_.cpu << std::endl;
+              << " realtime_priority=" << options_.realtime_priority << " cpu=" << options_.cpu
+              << " cpu_wakeup_latency=" << options_.cpu_wakeup_latency << std::endl;
     if (!options_.rss_csv.empty())
     {
       std::ofstream csv(options_.rss_csv);
@@ -537,7 +544,7 @@ const char* kUsage =
     "                         [--closed-loop] [--stream] [--rss-csv FILE] [--rss-every N]\n"
     "                         [--latency-csv FILE]\n"
     "                         [--nodelet compensator|madgwick|relay] [--manager-queues]\n"
-    "                         [--realtime-priority P] [--cpu N]\n";
+    "                         [--realtime-priority P] [--cpu N] [--cpu-wakeup-latency S]\n";
 
 /// The options, or nothing after --help.
 std::optional<Options> parseOptions(int argc, char** argv)
@@ -556,7 +563,8 @@ std::optional<Options> parseOptions(int argc, char** argv)
       .text("--nodelet", &o.nodelet)
       .flag("--manager-queues", &o.manager_queues)
       .integer("--realtime-priority", &o.realtime_priority)
-      .integer("--cpu", &o.cpu);
+      .integer("--cpu", &o.cpu)
+      .number("--cpu-wakeup-latency", &o.cpu_wakeup_latency);
   if (!cli.parse(argc, argv))
     return std::nullopt;
   if ((o.transport != "intra" && o.transport != "tcp") || o.scenario.empty() || !(o.rate > 0.0) || !(o.duration > 0.0))
@@ -582,12 +590,16 @@ int main(int argc, char** argv)
 {
   ros::init(argc, argv, "nodelet_benchmark");
   Options options;
+  pbc::CpuWakeupLatencyRequest wakeup_latency;  // held until the process ends
   try
   {
     const std::optional<Options> parsed = parseOptions(argc, argv);
     if (!parsed)
       return 0;
     options = *parsed;
+    std::string refused;
+    if (options.cpu_wakeup_latency >= 0.0 && !wakeup_latency.request(options.cpu_wakeup_latency, &refused))
+      throw pbc::UsageError("--cpu-wakeup-latency: " + refused);
     // Before any thread starts: every thread inherits it.
     std::string pinned;
     if (options.cpu >= 0 && !pbc::pinToCpu(static_cast<int>(options.cpu), &pinned))

@@ -98,7 +98,12 @@ class RenderTest(unittest.TestCase):
                  {'label': '2.8 kHz', 'group': 'side-by-side', 'fields': dict(base, nodelet='relay', p50_us='55')},
                  {'label': '2.8 kHz', 'group': 'side-by-side',
                   'fields': dict(base, nodelet='relay', realtime_priority='50', cpu='1', p50_us='44')},
-                 {'label': '2.8 kHz', 'group': 'side-by-side', 'fields': dict(base, nodelet='madgwick', dropped='7')}]
+                 {'label': '2.8 kHz', 'group': 'side-by-side', 'fields': dict(base, nodelet='madgwick', dropped='7')},
+                 {'label': '2.8 kHz', 'group': 'side-by-side',
+                  'fields': dict(base, nodelet='compensator', realtime_priority='50', cpu='1', cpu_wakeup_latency='0',
+                                 p50_us='33')},
+                 {'label': '2.8 kHz', 'group': 'side-by-side',
+                  'fields': dict(base, nodelet='relay', cpu_wakeup_latency='2e-05', p50_us='22')}]
         md = render(results)
         self.assertIn('| compensator | 2.8 kHz | %s | %s | 111 | 222 | 333 | 4.6 | 1.2 |' % (base['sent'], base['dropped']), md)
         self.assertIn("| compensator, manager's queues | 2.8 kHz | %s | %s | 99 | 222 | 333 | 4.6 | 1.2 |"
@@ -107,7 +112,12 @@ class RenderTest(unittest.TestCase):
         self.assertIn('| relay | 2.8 kHz | %s | %s | 55 | 222 | 333 | 4.6 | 1.2 |' % (base['sent'], base['dropped']), md)
         self.assertIn('| relay, SCHED_FIFO 50, CPU 1 | 2.8 kHz | %s | %s | 44 | 222 | 333 | 4.6 | 1.2 |'
                       % (base['sent'], base['dropped']), md)
+        self.assertIn('| compensator, SCHED_FIFO 50, CPU 1, idle CPUs polling | 2.8 kHz | %s | %s | 33 | 222 | 333 |'
+                      % (base['sent'], base['dropped']), md)
+        self.assertIn('| relay, CPU wake-up within 20 us | 2.8 kHz | %s | %s | 22 | 222 | 333 |'
+                      % (base['sent'], base['dropped']), md)
         self.assertIn('`SCHED_FIFO P, CPU N`: the threads a sample passes through', md)
+        self.assertIn('`idle CPUs polling`: the process holds a request', md)
         self.assertNotIn('Madgwick not measured', md)
         # Whether the fastest runs cover the start-up alone is said from their length.
         long_runs = dict(base, sent=str(int(40 * float(base['input_rate']))))
@@ -116,13 +126,13 @@ class RenderTest(unittest.TestCase):
                              (short_runs, 'The 2.8 kHz runs last 10 s: the start-up (calibration window, first '
                                           'designs) alone.')):
             timed = copy.deepcopy(results)
-            for run in timed['sections']['nodelet']['runs'][-5:]:
+            for run in timed['sections']['nodelet']['runs'][-7:]:
                 run['fields'].update(sent=fields['sent'])
             self.assertIn(said, render(timed))
         # The side-by-side runs stay out of the transport table.
         self.assertNotIn('| intra | 2.8 kHz |', md)
         self.assertIn('Madgwick not measured', render(dict(results, sections=dict(
-            results['sections'], nodelet=dict(results['sections']['nodelet'], runs=runs[:-1])))))
+            results['sections'], nodelet=dict(results['sections']['nodelet'], runs=runs[:-3])))))
 
     def test_wakeup_floor_rows(self):
         results = copy.deepcopy(FIXTURE)
@@ -134,13 +144,17 @@ class RenderTest(unittest.TestCase):
         runs += [{'label': '1 kHz', 'group': 'floor', 'fields': dict(floor, floor='handoff')},
                  {'label': '1 kHz', 'group': 'floor', 'fields': dict(floor, floor='spin', samples='17')},
                  {'label': '100 Hz', 'group': 'floor',
-                  'fields': dict(floor, floor='timer', realtime_priority='0', cpu='-1', rate='100')}]
+                  'fields': dict(floor, floor='timer', realtime_priority='0', cpu='-1', rate='100')},
+                 {'label': '100 Hz', 'group': 'floor',
+                  'fields': dict(floor, floor='handoff', realtime_priority='0', cpu='-1', rate='100',
+                                 cpu_wakeup_latency='0', p50_us='5.9')}]
         md = render(results)
         self.assertIn("The machine's own floor in the same run", md)
         self.assertIn('| handoff | 1 kHz | SCHED_FIFO 50, CPU 1 | 20000 | 12 | 46 | 7890 | 4 |', md)
         # The spinning thread is never real-time, and paced by nothing.
         self.assertIn('| spin | - | ordinary, CPU 1 | 17 | 12 | 46 | 7890 | 4 |', md)
         self.assertIn('| timer | 100 Hz | ordinary | 20000 | 12 | 46 | 7890 | 4 |', md)
+        self.assertIn('| handoff | 100 Hz | ordinary, idle CPUs polling | 20000 | 6 | 46 | 7890 | 4 |', md)
         # The floor stays out of the other tables.
         self.assertTrue(without.startswith(md.split("The machine's own floor")[0]))
 

@@ -3,6 +3,7 @@
 // not a test.
 //
 //   wakeup_floor --rate HZ --duration S [--realtime-priority P] [--cpu N] [--spin]
+//                [--cpu-wakeup-latency S]
 //
 // A ticking thread sleeps to each sample time k / HZ (absolute, steady clock) and then wakes a
 // second thread that waits on a condition variable, as the harness's publisher wakes a nodelet's
@@ -16,11 +17,13 @@
 // kernel, another thread or the hypervisor). Always at ordinary priority: a real-time thread that
 // never sleeps is throttled by the kernel (sched_rt_runtime_us), which would be measured instead.
 // With --realtime-priority P the two threads run SCHED_FIFO P (refused: an error before anything
-// runs); with --cpu N every thread runs on CPU N.
+// runs); with --cpu N every thread runs on CPU N. With --cpu-wakeup-latency S no CPU may take
+// longer than S seconds to come out of idle while it runs (0: idle CPUs poll; refused without write
+// access to /dev/cpu_dma_latency: an error before anything runs).
 //
 // Output: per measurement one line of key=value pairs on stdout:
 //   floor=NAME rate=HZ samples=N p50_us=.. p99_us=.. max_us=.. over_200us=.. over_1ms=..
-//   realtime_priority=P cpu=N
+//   realtime_priority=P cpu=N cpu_wakeup_latency=S
 #include <pthread.h>
 #include <sched.h>
 
@@ -38,6 +41,7 @@
 #include <vector>
 
 #include "periodic_bias_compensation/ros/callback_thread.h"
+#include "periodic_bias_compensation/ros/cpu_wakeup_latency.h"
 #include "periodic_bias_compensation/tools/command_line.h"
 
 namespace pbc = periodic_bias_compensation;
@@ -52,9 +56,12 @@ struct Options
   long realtime_priority = 0;
   long cpu = -1;
   bool spin = false;
+  double cpu_wakeup_latency = -1.0;  ///< [s]; < 0: no request
 };
 
-const char* kUsage = "usage: wakeup_floor --rate HZ --duration S [--realtime-priority P] [--cpu N] [--spin]\n";
+const char* kUsage =
+    "usage: wakeup_floor --rate HZ --duration S [--realtime-priority P] [--cpu N] [--spin]\n"
+    "                    [--cpu-wakeup-latency S]\n";
 
 std::optional<Options> parseOptions(int argc, char** argv)
 {
@@ -64,7 +71,8 @@ std::optional<Options> parseOptions(int argc, char** argv)
       .number("--duration", &o.duration)
       .integer("--realtime-priority", &o.realtime_priority)
       .integer("--cpu", &o.cpu)
-      .flag("--spin", &o.spin);
+      .flag("--spin", &o.spin)
+      .number("--cpu-wakeup-latency", &o.cpu_wakeup_latency);
   if (!cli.parse(argc, argv))
     return std::nullopt;
   if (!(o.rate > 0.0 && o.rate <= 100000.0) || !(o.duration > 0.0))
@@ -87,9 +95,9 @@ void report(const char* name, const Options& o, std::vector<double> us)
   const auto over = [&](double limit) { return us.end() - std::upper_bound(us.begin(), us.end(), limit); };
   std::printf(
       "floor=%s rate=%g samples=%zu p50_us=%.1f p99_us=%.1f max_us=%.1f over_200us=%ld over_1ms=%ld "
-      "realtime_priority=%ld cpu=%ld\n",
+      "realtime_priority=%ld cpu=%ld cpu_wakeup_latency=%g\n",
       name, o.rate, us.size(), at(0.5), at(0.99), us.empty() ? 0.0 : us.back(), static_cast<long>(over(200.0)),
-      static_cast<long>(over(1000.0)), o.realtime_priority, o.cpu);
+      static_cast<long>(over(1000.0)), o.realtime_priority, o.cpu, o.cpu_wakeup_latency);
 }
 
 /// The ticking thread and the one it wakes: `handoff` and `timer`.
@@ -179,12 +187,16 @@ void spin(const Options& o)
 int main(int argc, char** argv)
 {
   Options options;
+  pbc::CpuWakeupLatencyRequest wakeup_latency;  // held until the process ends
   try
   {
     const std::optional<Options> parsed = parseOptions(argc, argv);
     if (!parsed)
       return 0;
     options = *parsed;
+    std::string refused;
+    if (options.cpu_wakeup_latency >= 0.0 && !wakeup_latency.request(options.cpu_wakeup_latency, &refused))
+      throw pbc::UsageError("--cpu-wakeup-latency: " + refused);
     std::string pinned;
     if (options.cpu >= 0 && !pbc::pinToCpu(static_cast<int>(options.cpu), &pinned))
       throw pbc::UsageError("--cpu: " + pinned);

@@ -1,14 +1,18 @@
 // CallbackThread without a master: work posted to it runs on its own, named thread, in
 // order, its destructor waits for the callback it is running, and a real-time priority is its
-// thread's alone.
+// thread's alone. The other latency settings beside it: a process pinned to one CPU, and a
+// request for the CPUs' wake-up latency held while its object lives.
 #include <pthread.h>
 #include <sched.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <cmath>
 #include <condition_variable>
 #include <future>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <thread>
 #include <utility>
@@ -17,6 +21,7 @@
 #include <gtest/gtest.h>
 
 #include "periodic_bias_compensation/ros/callback_thread.h"
+#include "periodic_bias_compensation/ros/cpu_wakeup_latency.h"
 
 namespace
 {
@@ -138,12 +143,6 @@ TEST(CallbackThread, RealtimePriorityIsTheThreadsOwnOrRefusedWithTheReason)
   EXPECT_EQ(scheduling(), caller);
 }
 
-int main(int argc, char** argv)
-{
-  testing::InitGoogleTest(&argc, argv);
-  return RUN_ALL_TESTS();
-}
-
 // pinToCpu: the calling thread and those it starts run on that CPU alone; a CPU the machine does
 // not have is refused with the reason, the thread's CPUs unchanged.
 TEST(CallbackThread, PinToCpuHoldsTheCallerAndItsThreads)
@@ -177,4 +176,52 @@ TEST(CallbackThread, PinToCpuHoldsTheCallerAndItsThreads)
       }
     }
   }).join();
+}
+
+// A wake-up latency request out of range, or on a device that cannot be opened, is refused with
+// the reason and holds nothing. Where this process may read and write the kernel's device (root),
+// the kernel honours the strictest request held, and the limit before returns once both are
+// withdrawn.
+TEST(CpuWakeupLatency, RequestHeldWhileItsObjectLivesOrRefusedWithTheReason)
+{
+  using periodic_bias_compensation::cpuWakeupLatencyLimit;
+  using periodic_bias_compensation::CpuWakeupLatencyRequest;
+  CpuWakeupLatencyRequest first;
+  std::string why;
+  for (double out_of_range : { -1e-6, 1.5, std::nan("") })
+  {
+    EXPECT_FALSE(first.request(out_of_range, &why));
+    EXPECT_NE(why.find("is outside [0, 1] s"), std::string::npos) << why;
+    EXPECT_FALSE(first.held());
+  }
+  const std::string missing = "/nonexistent/cpu_dma_latency";
+  EXPECT_FALSE(first.request(0.0, &why, missing));
+  EXPECT_NE(why.find("cannot open " + missing + " for writing: "), std::string::npos) << why;
+  EXPECT_FALSE(first.held());
+  EXPECT_FALSE(cpuWakeupLatencyLimit(missing).has_value());
+
+  const std::optional<double> before = cpuWakeupLatencyLimit();
+  if (!before)
+    GTEST_SKIP() << "cannot read " << periodic_bias_compensation::kCpuWakeupLatencyDevice
+                 << " (it takes root): the kernel's limit not checked";
+  if (!first.request(20e-6, &why))
+    GTEST_SKIP() << "wake-up latency request refused, the kernel's limit not checked: " << why;
+  EXPECT_TRUE(first.held());
+  EXPECT_DOUBLE_EQ(*cpuWakeupLatencyLimit(), std::min(*before, 20e-6));
+  {
+    CpuWakeupLatencyRequest second;
+    ASSERT_TRUE(second.request(0.0, &why)) << why;
+    EXPECT_DOUBLE_EQ(*cpuWakeupLatencyLimit(), 0.0);
+    ASSERT_TRUE(second.request(1e-3, &why)) << why;  // replaces its own request
+    EXPECT_DOUBLE_EQ(*cpuWakeupLatencyLimit(), std::min(*before, 20e-6));
+  }
+  first.release();
+  EXPECT_FALSE(first.held());
+  EXPECT_DOUBLE_EQ(*cpuWakeupLatencyLimit(), *before);
+}
+
+int main(int argc, char** argv)
+{
+  testing::InitGoogleTest(&argc, argv);
+  return RUN_ALL_TESTS();
 }

@@ -2,14 +2,19 @@
 // the same manager (nodelet_unload.test): the unload waits for the sample being handled and
 // drops the ones queued, so the manager survives and every load answers again. Both ways imu/data
 // is served: a thread of the nodelet's own (~imu_thread, the default) and the manager's queues;
-// one load makes that thread real-time (~imu_thread_priority), as far as this machine allows.
+// one load makes that thread real-time (~imu_thread_priority), another asks every CPU to wake at
+// once (~cpu_wakeup_latency 0, withdrawn by the unload), as far as this machine allows.
 #include <dirent.h>
+#include <fcntl.h>
 #include <pthread.h>
 #include <sched.h>
 #include <sys/types.h>
+#include <unistd.h>
 
 #include <cstdint>
 #include <fstream>
+#include <iostream>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -96,6 +101,23 @@ bool realtimeAllowed()
   return true;
 }
 
+/// The CPU wake-up latency limit the kernel honours now [us] (read from its PM QoS device, as
+/// the kernel documents it, not through the code tested); nothing when this process may not both
+/// read and write the device: the manager, started the same way, may then not write it either.
+std::optional<std::int32_t> wakeupLimit()
+{
+  const char* device = "/dev/cpu_dma_latency";
+  if (access(device, R_OK | W_OK) != 0)
+    return std::nullopt;
+  const int fd = open(device, O_RDONLY);
+  if (fd < 0)
+    return std::nullopt;
+  std::int32_t limit = 0;
+  const bool read_whole = read(fd, &limit, sizeof(limit)) == static_cast<ssize_t>(sizeof(limit));
+  close(fd);
+  return read_whole ? std::optional<std::int32_t>(limit) : std::nullopt;
+}
+
 /// The nodelets the manager holds; false when it does not answer.
 bool listed(std::vector<std::string>* nodelets)
 {
@@ -117,6 +139,9 @@ TEST(NodeletUnload, UnloadWhileSamplesArriveLeavesTheManagerWorking)
   stream.amplitude = 0.3;
   stream.start();
   const bool realtime_allowed = realtimeAllowed();
+  if (!wakeupLimit())
+    std::cout << "/dev/cpu_dma_latency is not this user's to read and write: the wake-up latency request "
+                 "is not checked\n";
   const pid_t manager = nodePid("/manager");
   ASSERT_GT(manager, 0) << "the manager's process id is not known";
   for (int cycle = 0; cycle < 6; ++cycle)
@@ -127,6 +152,9 @@ TEST(NodeletUnload, UnloadWhileSamplesArriveLeavesTheManagerWorking)
                  ", priority " + std::to_string(priority));
     ros::param::set(std::string(kName) + "/imu_thread", own_thread);
     ros::param::set(std::string(kName) + "/imu_thread_priority", priority);
+    const bool wakeup_request = cycle == 4;
+    ros::param::set(std::string(kName) + "/cpu_wakeup_latency", wakeup_request ? 0.0 : -1.0);
+    const std::optional<std::int32_t> limit_before = wakeupLimit();
     ASSERT_TRUE(load()) << "the compensator did not load";
     ASSERT_TRUE(observer.waitForOdometry(500, 30.0)) << "no odometry/filtered after the load";
     const std::vector<pid_t> threads = imuThreads(manager);
@@ -140,8 +168,16 @@ TEST(NodeletUnload, UnloadWhileSamplesArriveLeavesTheManagerWorking)
       EXPECT_EQ(sched_getscheduler(threads[0]), realtime ? SCHED_FIFO : SCHED_OTHER);
       EXPECT_EQ(param.sched_priority, realtime ? priority : 0);
     }
+    if (limit_before)
+    {
+      EXPECT_EQ(wakeupLimit(), wakeup_request ? 0 : *limit_before);
+    }
     // Unloaded in the middle of the stream: a sample is being handled or queued at that moment.
     ASSERT_TRUE(unload()) << "the compensator did not unload";
+    if (limit_before)
+    {
+      EXPECT_EQ(wakeupLimit(), *limit_before) << "the wake-up latency request outlived the unload";
+    }
     std::vector<std::string> held;
     ASSERT_TRUE(listed(&held)) << "the manager does not answer after the unload";
     EXPECT_TRUE(held.empty()) << "the manager still holds " << held.front();

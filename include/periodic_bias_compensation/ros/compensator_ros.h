@@ -25,6 +25,7 @@
 #include "periodic_bias_compensation/core/raw_integrator.h"
 #include "periodic_bias_compensation/ros/callback_thread.h"
 #include "periodic_bias_compensation/ros/conversions.h"
+#include "periodic_bias_compensation/ros/cpu_wakeup_latency.h"
 #include "periodic_bias_compensation/ros/parameters.h"
 
 namespace periodic_bias_compensation
@@ -127,6 +128,7 @@ private:
   std::thread listener_release_;                             ///< destroys tf_listener_ (releaseTransformListener)
   std::unique_ptr<tf2_ros::TransformBroadcaster> tf_broadcaster_;
 
+  CpuWakeupLatencyRequest cpu_wakeup_latency_;  ///< held when params_.ros.cpu_wakeup_latency >= 0
   std::unique_ptr<CallbackThread> imu_thread_;  ///< serves imu_sub_ when params_.ros.imu_thread
   ros::Subscriber imu_sub_;
   ros::Publisher filtered_pub_;

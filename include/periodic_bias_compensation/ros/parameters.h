@@ -32,6 +32,7 @@ struct RosOptions
   double diagnostic_period = 1.0;        ///< period of /diagnostics (read by diagnostic_updater) [s]
   bool imu_thread = true;                ///< imu/data served by a thread of its own (CallbackThread)
   int imu_thread_priority = 0;           ///< SCHED_FIFO priority of that thread; 0: ordinary
+  double cpu_wakeup_latency = -1.0;      ///< wake-up latency asked of every CPU [s]; < 0: none
 
   /// False with a message naming the key when a value is out of range (rosOptionParameters())
   /// or odom_frame equals base_frame, or imu_thread_priority is set without imu_thread.
