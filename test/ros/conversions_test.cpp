@@ -300,6 +300,8 @@ TEST(Parameters, ErrorsNameTheKey)
   EXPECT_NE(why.find("imu_thread_priority = 100 is out of range [0, 99]"), std::string::npos) << why;
   EXPECT_FALSE(readYaml("imu_thread: false\nimu_thread_priority: 20\n", &params, &why));
   EXPECT_NE(why.find("imu_thread_priority needs imu_thread: true"), std::string::npos) << why;
+  EXPECT_FALSE(readYaml("cpu_wakeup_latency: 1.5\n", &params, &why));
+  EXPECT_NE(why.find("cpu_wakeup_latency = 1.5 is out of range [-1, 1]"), std::string::npos) << why;
   EXPECT_THROW(YamlParameterSource("/nonexistent/params.yaml"), std::runtime_error);
   EXPECT_THROW(readYaml("- a\n- b\n", &params, &why), std::runtime_error);
 
@@ -311,6 +313,9 @@ TEST(Parameters, ErrorsNameTheKey)
   EXPECT_EQ(ok.ros.imu_frame, "imu_link");
   ASSERT_TRUE(readYaml("imu_thread_priority: 20\n", &ok, &why)) << why;
   EXPECT_EQ(ok.ros.imu_thread_priority, 20);
+  EXPECT_DOUBLE_EQ(ok.ros.cpu_wakeup_latency, -1.0);
+  ASSERT_TRUE(readYaml("cpu_wakeup_latency: 0\n", &ok, &why)) << why;
+  EXPECT_DOUBLE_EQ(ok.ros.cpu_wakeup_latency, 0.0);
 }
 
 namespace
