@@ -29,8 +29,7 @@ void PeriodicWave::start(double frequency, double rate, double memory, int harmo
   const int period = static_cast<int>(std::ceil(rate / frequency));
   const int count = std::min(history_.size(), std::max(period, static_cast<int>(rate * memory)));
   // The newest kept sample (lag 1) is the previous one, at phase 0.
-  for (int lag = count; lag >= 1; --lag)
-    model_.update(-(lag - 1) * step, history_.ago(lag), lambda);
+  model_.fit(count, -(count - 1) * step, step, lambda, [&](int k) { return history_.ago(count - k); });
   if (previous_weight_ > 0.0 || model_.updates() < rate / frequency)
     return;
   const double omega = 2.0 * M_PI * frequency;

@@ -148,6 +148,99 @@ public:
     ++updates_;
     return residual;
   }
+  /// Right after reset(): the state that `count` update()s would leave (the k-th, k = 0 ..
+  /// count - 1, at phase first_phase + k step with value(k), all with forgetting factor lambda),
+  /// equal to it up to rounding and a few times cheaper: the exponentially weighted normal
+  /// equations are summed in one pass and solved once. Fits a new model to a stretch of history.
+  template <class Value>
+  void fit(int count, double first_phase, double step, double lambda, const Value& value)
+  {
+    // RLS from P0 = 1e4 I and theta = 0 minimises sum lambda^(count-1-k) e_k^2 + lambda^count
+    // theta' P0^-1 theta: information A = lambda A + h h', A_0 = P0^-1; b = lambda b + h y.
+    std::array<Vector, kMaxParameters> information{};
+    Vector weighted{};
+    for (int i = 0; i < n_; ++i)
+      information[i][i] = 1.0 / covariance_[i][i];
+    Vector h{};
+    h[0] = 1.0;
+    double c1 = 0.0, s1 = 0.0;
+    const double step_c = std::cos(step), step_s = std::sin(step);
+    for (int k = 0; k < count; ++k)
+    {
+      // The fundamental by rotation, from sin/cos again every kReanchor samples.
+      if (k % kReanchor == 0)
+      {
+        c1 = std::cos(first_phase + k * step);
+        s1 = std::sin(first_phase + k * step);
+      }
+      else
+      {
+        const double next_c = c1 * step_c - s1 * step_s;
+        s1 = s1 * step_c + c1 * step_s;
+        c1 = next_c;
+      }
+      double c = c1, s = s1;
+      for (int j = 1; j <= harmonics_; ++j)
+      {
+        h[2 * j - 1] = c;
+        h[2 * j] = s;
+        const double next_c = c * c1 - s * s1;
+        s = s * c1 + c * s1;
+        c = next_c;
+      }
+      const double y = value(k);
+      for (int i = 0; i < n_; ++i)
+      {
+        weighted[i] = lambda * weighted[i] + h[i] * y;
+        for (int j = i; j < n_; ++j)
+          information[i][j] = lambda * information[i][j] + h[i] * h[j];
+      }
+    }
+    // Cholesky factor L of the information (upper triangle held), then P = L^-T L^-1, theta = P b.
+    std::array<Vector, kMaxParameters> lower{};
+    for (int j = 0; j < n_; ++j)
+    {
+      double diagonal = information[j][j];
+      for (int m = 0; m < j; ++m)
+        diagonal -= lower[j][m] * lower[j][m];
+      lower[j][j] = std::sqrt(diagonal);
+      for (int i = j + 1; i < n_; ++i)
+      {
+        double sum = information[j][i];
+        for (int m = 0; m < j; ++m)
+          sum -= lower[i][m] * lower[j][m];
+        lower[i][j] = sum / lower[j][j];
+      }
+    }
+    std::array<Vector, kMaxParameters> inverse_lower{};  // L^-1, lower triangular
+    for (int j = 0; j < n_; ++j)
+    {
+      inverse_lower[j][j] = 1.0 / lower[j][j];
+      for (int i = j + 1; i < n_; ++i)
+      {
+        double sum = 0.0;
+        for (int m = j; m < i; ++m)
+          sum -= lower[i][m] * inverse_lower[m][j];
+        inverse_lower[i][j] = sum / lower[i][i];
+      }
+    }
+    for (int i = 0; i < n_; ++i)
+      for (int j = i; j < n_; ++j)
+      {
+        double sum = 0.0;
+        for (int m = j; m < n_; ++m)
+          sum += inverse_lower[m][i] * inverse_lower[m][j];
+        covariance_[i][j] = covariance_[j][i] = sum;
+      }
+    for (int i = 0; i < n_; ++i)
+    {
+      theta_[i] = 0.0;
+      for (int j = 0; j < n_; ++j)
+        theta_[i] += covariance_[i][j] * weighted[j];
+    }
+    regressor_phase_ = NAN;
+    updates_ += count;
+  }
   /// Periodic part (without the constant) of the acceleration, its displacement and velocity
   /// for the current phase; omega [rad/s] is the fundamental. variance_factor: h' P h of the
   /// displacement (multiply by the residual variance).
@@ -215,6 +308,10 @@ private:
         sum += d[i] * covariance_[i][j] * d[j];
     return sum;
   }
+
+  /// fit(): samples between two sin/cos calls of the fundamental (the rotation in between drifts
+  /// by rounding about a 1e-16 per step).
+  static constexpr int kReanchor = 256;
 
   int harmonics_ = 1;
   int n_ = 3;
