@@ -179,15 +179,7 @@ public:
         s1 = s1 * step_c + c1 * step_s;
         c1 = next_c;
       }
-      double c = c1, s = s1;
-      for (int j = 1; j <= harmonics_; ++j)
-      {
-        h[2 * j - 1] = c;
-        h[2 * j] = s;
-        const double next_c = c * c1 - s * s1;
-        s = s * c1 + c * s1;
-        c = next_c;
-      }
+      fillHarmonics(c1, s1, &h);
       const double y = value(k);
       for (int i = 0; i < n_; ++i)
       {
@@ -288,13 +280,17 @@ private:
     if (phase == regressor_phase_)
       return;
     regressor_phase_ = phase;
-    const double c1 = std::cos(phase), s1 = std::sin(phase);
     regressor_[0] = 1.0;
+    fillHarmonics(std::cos(phase), std::sin(phase), &regressor_);
+  }
+  /// cos(k phi), sin(k phi), k = 1..harmonics_, into h[1..] from those of the fundamental.
+  void fillHarmonics(double c1, double s1, Vector* h) const
+  {
     double c = c1, s = s1;
     for (int k = 1; k <= harmonics_; ++k)
     {
-      regressor_[2 * k - 1] = c;
-      regressor_[2 * k] = s;
+      (*h)[2 * k - 1] = c;
+      (*h)[2 * k] = s;
       const double next_c = c * c1 - s * s1;
       s = s * c1 + c * s1;
       c = next_c;
