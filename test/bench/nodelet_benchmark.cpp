@@ -72,6 +72,7 @@
 #include <unistd.h>
 #include <pluginlib/class_loader.hpp>
 
+#include "latency_settings.h"
 #include "periodic_bias_compensation/ros/callback_thread.h"
 #include "periodic_bias_compensation/ros/compensator_ros.h"
 #include "periodic_bias_compensation/ros/cpu_wakeup_latency.h"
@@ -597,19 +598,11 @@ int main(int argc, char** argv)
     if (!parsed)
       return 0;
     options = *parsed;
-    std::string refused;
-    if (options.cpu_wakeup_latency >= 0.0 && !wakeup_latency.request(options.cpu_wakeup_latency, &refused))
-      throw pbc::UsageError("--cpu-wakeup-latency: " + refused);
-    // Before any thread starts: every thread inherits it.
-    std::string pinned;
-    if (options.cpu >= 0 && !pbc::pinToCpu(static_cast<int>(options.cpu), &pinned))
-      throw pbc::UsageError("--cpu: " + pinned);
+    // The priority is asked for here, before anything is loaded, so that a refusal is an error
+    // rather than a nodelet's onInit() failing; the main thread then runs as an ordinary one.
+    pbc::applyLatencySettings(options.cpu_wakeup_latency, options.cpu, options.realtime_priority, &wakeup_latency);
     if (options.realtime_priority > 0)
     {
-      // Refused here, before anything is loaded, rather than in a nodelet's onInit().
-      std::string why;
-      if (!pbc::setRealtimePriority(pthread_self(), static_cast<int>(options.realtime_priority), &why))
-        throw pbc::UsageError("--realtime-priority: " + why);
       const sched_param ordinary{};
       pthread_setschedparam(pthread_self(), SCHED_OTHER, &ordinary);
     }

@@ -40,6 +40,7 @@
 #include <thread>
 #include <vector>
 
+#include "latency_settings.h"
 #include "periodic_bias_compensation/ros/callback_thread.h"
 #include "periodic_bias_compensation/ros/cpu_wakeup_latency.h"
 #include "periodic_bias_compensation/tools/command_line.h"
@@ -194,16 +195,7 @@ int main(int argc, char** argv)
     if (!parsed)
       return 0;
     options = *parsed;
-    std::string refused;
-    if (options.cpu_wakeup_latency >= 0.0 && !wakeup_latency.request(options.cpu_wakeup_latency, &refused))
-      throw pbc::UsageError("--cpu-wakeup-latency: " + refused);
-    std::string pinned;
-    if (options.cpu >= 0 && !pbc::pinToCpu(static_cast<int>(options.cpu), &pinned))
-      throw pbc::UsageError("--cpu: " + pinned);
-    std::string why;
-    if (options.realtime_priority > 0 &&
-        !pbc::setRealtimePriority(pthread_self(), static_cast<int>(options.realtime_priority), &why))
-      throw pbc::UsageError("--realtime-priority: " + why);
+    pbc::applyLatencySettings(options.cpu_wakeup_latency, options.cpu, options.realtime_priority, &wakeup_latency);
   }
   catch (const pbc::UsageError& e)
   {
