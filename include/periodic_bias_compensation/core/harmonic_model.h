@@ -14,6 +14,9 @@
 #include <deque>
 #include <vector>
 
+#include <Eigen/Cholesky>
+#include <Eigen/Core>
+
 #include "periodic_bias_compensation/core/zeroed_buffer.h"
 
 namespace periodic_bias_compensation
@@ -157,10 +160,12 @@ public:
   {
     // RLS from P0 = 1e4 I and theta = 0 minimises sum lambda^(count-1-k) e_k^2 + lambda^count
     // theta' P0^-1 theta: information A = lambda A + h h', A_0 = P0^-1; b = lambda b + h y.
-    std::array<Vector, kMaxParameters> information{};
-    Vector weighted{};
+    using Matrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxParameters, kMaxParameters>;
+    using Column = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kMaxParameters, 1>;
+    Matrix information = Matrix::Zero(n_, n_);  // its upper triangle
+    Column weighted = Column::Zero(n_);
     for (int i = 0; i < n_; ++i)
-      information[i][i] = 1.0 / covariance_[i][i];
+      information(i, i) = 1.0 / covariance_[i][i];
     Vector h{};
     h[0] = 1.0;
     double c1 = 0.0, s1 = 0.0;
@@ -185,50 +190,17 @@ public:
       {
         weighted[i] = lambda * weighted[i] + h[i] * y;
         for (int j = i; j < n_; ++j)
-          information[i][j] = lambda * information[i][j] + h[i] * h[j];
+          information(i, j) = lambda * information(i, j) + h[i] * h[j];
       }
     }
-    // Cholesky factor L of the information (upper triangle held), then P = L^-T L^-1, theta = P b.
-    std::array<Vector, kMaxParameters> lower{};
-    for (int j = 0; j < n_; ++j)
-    {
-      double diagonal = information[j][j];
-      for (int m = 0; m < j; ++m)
-        diagonal -= lower[j][m] * lower[j][m];
-      lower[j][j] = std::sqrt(diagonal);
-      for (int i = j + 1; i < n_; ++i)
-      {
-        double sum = information[j][i];
-        for (int m = 0; m < j; ++m)
-          sum -= lower[i][m] * lower[j][m];
-        lower[i][j] = sum / lower[j][j];
-      }
-    }
-    std::array<Vector, kMaxParameters> inverse_lower{};  // L^-1, lower triangular
-    for (int j = 0; j < n_; ++j)
-    {
-      inverse_lower[j][j] = 1.0 / lower[j][j];
-      for (int i = j + 1; i < n_; ++i)
-      {
-        double sum = 0.0;
-        for (int m = j; m < i; ++m)
-          sum -= lower[i][m] * inverse_lower[m][j];
-        inverse_lower[i][j] = sum / lower[i][i];
-      }
-    }
+    // P = A^-1 by Cholesky, theta = P b.
+    const Matrix p = information.selfadjointView<Eigen::Upper>().llt().solve(Matrix::Identity(n_, n_));
+    const Column theta = p * weighted;
     for (int i = 0; i < n_; ++i)
+    {
+      theta_[i] = theta[i];
       for (int j = i; j < n_; ++j)
-      {
-        double sum = 0.0;
-        for (int m = j; m < n_; ++m)
-          sum += inverse_lower[m][i] * inverse_lower[m][j];
-        covariance_[i][j] = covariance_[j][i] = sum;
-      }
-    for (int i = 0; i < n_; ++i)
-    {
-      theta_[i] = 0.0;
-      for (int j = 0; j < n_; ++j)
-        theta_[i] += covariance_[i][j] * weighted[j];
+        covariance_[i][j] = covariance_[j][i] = p(i, j);
     }
     regressor_phase_ = NAN;
     updates_ += count;
