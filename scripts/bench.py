@@ -253,35 +253,25 @@ class Bench:
         polling = self.polling_allowed()
         log('nodelet side by side: 100 Hz, 1 kHz, 2.8 kHz, with the relay' + (' and Madgwick' if madgwick else '')
             + (', also with idle CPUs polling' if polling else ''))
+        # Each rate's runs: (nodelet_benchmark's options, environment). Real-time: the sample's threads
+        # at SCHED_FIFO 50, the process on one CPU.
+        realtime = ['--realtime-priority', 50, '--cpu', REALTIME_CPU]
+        poll = ['--cpu-wakeup-latency', 0]
+        variants = [([], None), (['--manager-queues'], None), (['--nodelet', 'relay'], None)]
+        variants += [(['--nodelet', nodelet] + realtime, None) for nodelet in ('compensator', 'relay')]
+        if madgwick:
+            variants.append((['--nodelet', 'madgwick'], madgwick))
+        if polling:
+            variants += [(['--nodelet', nodelet] + poll, None) for nodelet in ('compensator', 'relay')]
+            variants.append((poll + realtime, None))
+            if madgwick:
+                variants.append((['--nodelet', 'madgwick'] + poll, madgwick))
         runs = []
         for label, rate, seconds in (('100 Hz', 100, self.paced_s[0]), ('1 kHz', 1000, self.paced_s[1]),
                                      ('2.8 kHz', 2800, self.side_fast_s)):
-            runs.append(self.nodelet_run(label, 'intra', '--rate', rate, '--duration', seconds,
-                                         group='side-by-side'))
-            runs.append(self.nodelet_run(label, 'intra', '--rate', rate, '--duration', seconds,
-                                         '--manager-queues', group='side-by-side'))
-            runs.append(self.nodelet_run(label, 'intra', '--rate', rate, '--duration', seconds,
-                                         '--nodelet', 'relay', group='side-by-side'))
-            # Real-time: the sample's threads at SCHED_FIFO 50, the process on one CPU.
-            for nodelet in ('compensator', 'relay'):
-                runs.append(self.nodelet_run(label, 'intra', '--rate', rate, '--duration', seconds,
-                                             '--nodelet', nodelet, '--realtime-priority', 50, '--cpu',
-                                             REALTIME_CPU, group='side-by-side'))
-            if madgwick:
-                runs.append(self.nodelet_run(label, 'intra', '--rate', rate, '--duration', seconds,
-                                             '--nodelet', 'madgwick', env=madgwick, group='side-by-side'))
-            if polling:
-                poll = ['--cpu-wakeup-latency', 0]
-                for nodelet in ('compensator', 'relay'):
-                    runs.append(self.nodelet_run(label, 'intra', '--rate', rate, '--duration', seconds,
-                                                 '--nodelet', nodelet, *poll, group='side-by-side'))
-                runs.append(self.nodelet_run(label, 'intra', '--rate', rate, '--duration', seconds, *poll,
-                                             '--realtime-priority', 50, '--cpu', REALTIME_CPU,
+            for extra, env in variants:
+                runs.append(self.nodelet_run(label, 'intra', '--rate', rate, '--duration', seconds, *extra, env=env,
                                              group='side-by-side'))
-                if madgwick:
-                    runs.append(self.nodelet_run(label, 'intra', '--rate', rate, '--duration', seconds,
-                                                 '--nodelet', 'madgwick', *poll, env=madgwick,
-                                                 group='side-by-side'))
         return runs
 
     def polling_allowed(self):
